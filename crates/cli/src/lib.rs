@@ -1,0 +1,238 @@
+//! Plumbing shared by every UG tool (DESIGN.md §3):
+//!
+//! * input from a file argument or stdin (`-` or nothing), named `<stdin>` in messages;
+//! * output written only when the whole job succeeded: stdout in one buffered
+//!   write, `-o FILE` through a temporary file renamed into place;
+//! * a closed pipe (`| head`) ends quietly with status 0;
+//! * exit status 0 success, 1 runtime failure, 2 bad input or usage;
+//! * `-q` / `-v`, the model-relative epsilon, progress bars on a terminal only.
+
+use std::io::{self, IsTerminal, Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::Args;
+
+pub use ug;
+
+/// Exit status for bad input or usage.
+pub const EXIT_INPUT: u8 = 2;
+/// Exit status for a runtime failure (e.g. a requested device is missing).
+pub const EXIT_RUNTIME: u8 = 1;
+
+/// An error that ends a tool: its message (already formatted) and exit status.
+#[derive(Debug)]
+pub struct Failure {
+    pub code: u8,
+    pub message: String,
+}
+
+impl Failure {
+    pub fn input(message: impl Into<String>) -> Self {
+        Failure {
+            code: EXIT_INPUT,
+            message: message.into(),
+        }
+    }
+    pub fn runtime(message: impl Into<String>) -> Self {
+        Failure {
+            code: EXIT_RUNTIME,
+            message: message.into(),
+        }
+    }
+}
+
+impl From<ug::Diagnostic> for Failure {
+    fn from(d: ug::Diagnostic) -> Self {
+        Failure::input(d.to_string())
+    }
+}
+
+/// Flags every UG filter takes.
+#[derive(Args, Debug, Clone, Default)]
+pub struct Common {
+    /// Input UG file; stdin when absent or '-'.
+    #[arg(value_name = "FILE")]
+    pub input: Option<PathBuf>,
+    /// Write the result to FILE (atomically) instead of stdout.
+    #[arg(short = 'o', long = "output", value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// No progress or warnings on stderr.
+    #[arg(short = 'q', long, conflicts_with = "verbose")]
+    pub quiet: bool,
+    /// More detail on stderr (statistics, timings, the epsilon used).
+    #[arg(short = 'v', long, action = clap::ArgAction::Count)]
+    pub verbose: u8,
+    /// Unknown UG statements are errors instead of warnings.
+    #[arg(long)]
+    pub strict: bool,
+}
+
+/// The bytes of the input and the name used in messages.
+pub struct Input {
+    pub bytes: Vec<u8>,
+    pub name: String,
+    /// Directory includes are resolved against.
+    pub dir: PathBuf,
+}
+
+impl Common {
+    /// Reads the input file or stdin.
+    pub fn read_input(&self) -> Result<Input, Failure> {
+        match self.input.as_deref() {
+            None => read_stdin(),
+            Some(p) if p == Path::new("-") => read_stdin(),
+            Some(p) => {
+                let bytes = std::fs::read(p).map_err(|e| {
+                    Failure::input(format!("{}: error: cannot read: {e}", p.display()))
+                })?;
+                Ok(Input {
+                    bytes,
+                    name: p.display().to_string(),
+                    dir: p.parent().map(Path::to_path_buf).unwrap_or_default(),
+                })
+            }
+        }
+    }
+
+    /// Reads and parses the input; warnings go to stderr unless `-q`.
+    pub fn load(&self) -> Result<ug::Model, Failure> {
+        let input = self.read_input()?;
+        let opts = ug::ParseOptions {
+            strict: self.strict,
+            ..Default::default()
+        };
+        let parsed = ug::parse_with(&input.bytes, &input.name, Some(&input.dir), &opts)?;
+        if !self.quiet {
+            for w in &parsed.warnings {
+                eprintln!("{w}");
+            }
+        }
+        Ok(parsed.model)
+    }
+
+    /// Reads, parses and flattens the input (geometry tools work on flat models).
+    pub fn load_flat(&self) -> Result<ug::Model, Failure> {
+        let m = self.load()?;
+        if !m.is_flat() && self.verbose > 0 {
+            eprintln!(
+                "note: flattening {} instance(s) of {} def(s)",
+                m.instances.len(),
+                m.defs.len()
+            );
+        }
+        Ok(m.flatten()?)
+    }
+
+    /// Writes the finished output (see [`write_output`]).
+    pub fn write(&self, bytes: &[u8]) -> Result<(), Failure> {
+        write_output(self.output.as_deref(), bytes)
+    }
+
+    /// Writes a model as UG.
+    pub fn write_model(&self, m: &ug::Model) -> Result<(), Failure> {
+        let mut buf = Vec::new();
+        ug::write(m, &mut buf).map_err(|e| Failure::runtime(format!("error: {e}")))?;
+        self.write(&buf)
+    }
+
+    /// Prints a note on stderr when `-v` was given.
+    pub fn verbose(&self, msg: impl AsRef<str>) {
+        if self.verbose > 0 {
+            eprintln!("{}", msg.as_ref());
+        }
+    }
+
+    /// A progress bar on stderr, hidden with `-q` or when stderr is not a terminal.
+    pub fn progress(&self, len: u64, what: &str) -> indicatif::ProgressBar {
+        if self.quiet || !io::stderr().is_terminal() {
+            return indicatif::ProgressBar::hidden();
+        }
+        let pb = indicatif::ProgressBar::new(len);
+        if let Ok(style) =
+            indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} {elapsed}")
+        {
+            pb.set_style(style.progress_chars("=> "));
+        }
+        pb.set_message(what.to_string());
+        pb
+    }
+}
+
+fn read_stdin() -> Result<Input, Failure> {
+    let mut bytes = Vec::new();
+    io::stdin()
+        .lock()
+        .read_to_end(&mut bytes)
+        .map_err(|e| Failure::input(format!("<stdin>: error: cannot read: {e}")))?;
+    Ok(Input {
+        bytes,
+        name: "<stdin>".to_string(),
+        dir: PathBuf::new(),
+    })
+}
+
+/// Writes all of `bytes` to `path` (atomically: temporary file, then rename) or to stdout.
+/// A closed stdout pipe is not an error.
+pub fn write_output(path: Option<&Path>, bytes: &[u8]) -> Result<(), Failure> {
+    match path {
+        Some(p) if p != Path::new("-") => {
+            let dir = match p.parent() {
+                Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+                _ => PathBuf::from("."),
+            };
+            let fail = |e: &dyn std::fmt::Display| {
+                Failure::runtime(format!("{}: error: cannot write: {e}", p.display()))
+            };
+            let mut tmp = tempfile::NamedTempFile::new_in(&dir).map_err(|e| fail(&e))?;
+            tmp.write_all(bytes).map_err(|e| fail(&e))?;
+            tmp.as_file().sync_all().map_err(|e| fail(&e))?;
+            tmp.persist(p).map_err(|e| fail(&e.error))?;
+            Ok(())
+        }
+        _ => {
+            let mut out = io::stdout().lock();
+            match out.write_all(bytes).and_then(|_| out.flush()) {
+                Ok(()) => Ok(()),
+                Err(e) if e.kind() == io::ErrorKind::BrokenPipe => Ok(()),
+                Err(e) => Err(Failure::runtime(format!(
+                    "<stdout>: error: cannot write: {e}"
+                ))),
+            }
+        }
+    }
+}
+
+/// Runs a tool's body and turns its result into an exit status; errors go to stderr.
+pub fn run(body: impl FnOnce() -> Result<(), Failure>) -> ExitCode {
+    match body() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(f) => {
+            let _ = writeln!(io::stderr(), "{}", f.message);
+            ExitCode::from(f.code)
+        }
+    }
+}
+
+/// The model-relative default epsilon: this fraction of the bounding-box diagonal.
+pub const RELATIVE_EPSILON: f64 = 1e-6;
+
+/// The epsilon a tool uses: `-e` when given (absolute units), else
+/// [`RELATIVE_EPSILON`] times the model's bounding-box diagonal (1e-9 for an empty or point model).
+pub fn epsilon(explicit: Option<f64>, m: &ug::Model) -> f64 {
+    if let Some(e) = explicit {
+        return e;
+    }
+    match m.bounds() {
+        Some((lo, hi)) if (hi - lo).length() > 0.0 => RELATIVE_EPSILON * (hi - lo).length(),
+        _ => 1e-9,
+    }
+}
+
+/// Parses an `-e` value: a finite, non-negative number.
+pub fn parse_epsilon(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("'{s}' is not a finite, non-negative number")),
+    }
+}

@@ -1,0 +1,16 @@
+//! f64 geometry shared by the UG tools.
+//!
+//! Topological decisions (orientation, side of a plane, point on a segment,
+//! segment crossings) go through the exact predicates of the `robust` crate
+//! (Shewchuk's adaptive arithmetic); constructions are plain f64.
+
+pub mod index;
+pub mod plane;
+pub mod polygon;
+pub mod predicates;
+
+pub use glam::{DVec2, DVec3};
+pub use index::BoxIndex;
+pub use plane::{Frame, Plane, newell_normal};
+pub use polygon::*;
+pub use predicates::*;

@@ -1,0 +1,112 @@
+//! Planes, Newell normals and 2-D frames for projecting planar polygons.
+
+use glam::{DVec2, DVec3};
+
+/// Newell's normal of a closed polygon: its direction follows the right-hand
+/// rule of the vertex order and its length is twice the polygon's area
+/// (for a planar polygon). Robust for non-convex and slightly non-planar contours.
+pub fn newell_normal(pts: &[DVec3]) -> DVec3 {
+    let n = pts.len();
+    if n < 3 {
+        return DVec3::ZERO;
+    }
+    // Relative to the first point for accuracy far from the origin.
+    let o = pts[0];
+    let mut acc = DVec3::ZERO;
+    for i in 0..n {
+        let a = pts[i] - o;
+        let b = pts[(i + 1) % n] - o;
+        acc += a.cross(b);
+    }
+    acc
+}
+
+/// A plane `n·p = d` with unit normal `n`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plane {
+    pub n: DVec3,
+    pub d: f64,
+}
+
+impl Plane {
+    /// The best-fit plane of a contour: Newell normal through the centroid.
+    /// `None` when the contour has no area (degenerate).
+    pub fn fit(pts: &[DVec3]) -> Option<Plane> {
+        let n = newell_normal(pts);
+        let len = n.length();
+        if !(len > 0.0) || pts.is_empty() {
+            return None;
+        }
+        let n = n / len;
+        let c = pts.iter().copied().sum::<DVec3>() / pts.len() as f64;
+        Some(Plane { n, d: n.dot(c) })
+    }
+
+    /// Signed distance of a point from the plane (positive on the normal's side).
+    pub fn dist(&self, p: DVec3) -> f64 {
+        self.n.dot(p) - self.d
+    }
+
+    /// The plane with the opposite orientation.
+    pub fn flipped(&self) -> Plane {
+        Plane {
+            n: -self.n,
+            d: -self.d,
+        }
+    }
+}
+
+/// An orthonormal frame (u, v, n) for projecting points of a plane to 2-D.
+/// (u, v, n) is right-handed, so counter-clockwise seen from the front of the
+/// plane (from +n) stays counter-clockwise in (u, v).
+#[derive(Clone, Copy, Debug)]
+pub struct Frame {
+    pub origin: DVec3,
+    pub u: DVec3,
+    pub v: DVec3,
+    pub n: DVec3,
+}
+
+impl Frame {
+    /// A frame with normal `n` (need not be unit) at `origin`.
+    pub fn new(origin: DVec3, n: DVec3) -> Frame {
+        let n = n.normalize_or_zero();
+        let n = if n == DVec3::ZERO { DVec3::Z } else { n };
+        // The axis least aligned with n gives a stable u.
+        let a = if n.x.abs() <= n.y.abs() && n.x.abs() <= n.z.abs() {
+            DVec3::X
+        } else if n.y.abs() <= n.z.abs() {
+            DVec3::Y
+        } else {
+            DVec3::Z
+        };
+        let u = a.cross(n).normalize();
+        let v = n.cross(u);
+        Frame { origin, u, v, n }
+    }
+
+    /// A frame whose u axis follows `dir` (projected into the plane).
+    pub fn with_u(origin: DVec3, n: DVec3, dir: DVec3) -> Frame {
+        let f = Frame::new(origin, n);
+        let d = dir - f.n * dir.dot(f.n);
+        if d.length_squared() == 0.0 {
+            return f;
+        }
+        let u = d.normalize();
+        Frame {
+            origin,
+            u,
+            v: f.n.cross(u),
+            n: f.n,
+        }
+    }
+
+    pub fn to_2d(&self, p: DVec3) -> DVec2 {
+        let d = p - self.origin;
+        DVec2::new(d.dot(self.u), d.dot(self.v))
+    }
+
+    pub fn to_3d(&self, p: DVec2) -> DVec3 {
+        self.origin + self.u * p.x + self.v * p.y
+    }
+}

@@ -1,0 +1,226 @@
+//! The canonical writer: one statement per line, single spaces, shortest
+//! round-trip numbers. The same model always gives the same bytes.
+
+use std::io::{self, Write};
+
+use crate::model::*;
+
+/// Formats a finite f64 in the shortest form that reads back to the same value
+/// (`1` rather than `1.0`).
+pub fn fmt_f64(v: f64, buf: &mut ryu::Buffer) -> &str {
+    let v = if v == 0.0 { 0.0 } else { v }; // no "-0"
+    let s = buf.format(v);
+    s.strip_suffix(".0").unwrap_or(s)
+}
+
+/// Writes a model as UG text.
+pub fn write<W: Write>(m: &Model, out: &mut W) -> io::Result<()> {
+    let mut w = Writer {
+        m,
+        buf: ryu::Buffer::new(),
+        out: Vec::with_capacity(1 << 16),
+    };
+    w.items(&m.items, 0);
+    out.write_all(&w.out)
+}
+
+/// The model as a UG string.
+pub fn write_string(m: &Model) -> String {
+    let mut v = Vec::new();
+    write(m, &mut v).expect("writing to a Vec cannot fail");
+    String::from_utf8(v).expect("the writer emits UTF-8")
+}
+
+struct Writer<'m> {
+    m: &'m Model,
+    buf: ryu::Buffer,
+    out: Vec<u8>,
+}
+
+impl Writer<'_> {
+    fn s(&mut self, s: &str) {
+        self.out.extend_from_slice(s.as_bytes());
+    }
+    fn num(&mut self, v: f64) {
+        let s = fmt_f64(v, &mut self.buf);
+        self.out.extend_from_slice(s.as_bytes());
+    }
+    fn nums(&mut self, vs: &[f64]) {
+        for &v in vs {
+            self.out.push(b' ');
+            self.num(v);
+        }
+    }
+    fn indent(&mut self, depth: usize) {
+        for _ in 0..depth {
+            self.out.extend_from_slice(b"  ");
+        }
+    }
+    fn mat_suffix(&mut self, m: Option<MaterialId>) {
+        if let Some(m) = m {
+            self.out.push(b' ');
+            let name = &self.m.materials[m.idx()].name;
+            self.out.extend_from_slice(name.as_bytes());
+        }
+    }
+    fn contours(&mut self, cs: &[Vec<VertexId>]) {
+        for c in cs {
+            self.s(" (");
+            for (k, v) in c.iter().enumerate() {
+                if k > 0 {
+                    self.out.push(b' ');
+                }
+                let name = &self.m.vertices[v.idx()].name;
+                self.out.extend_from_slice(name.as_bytes());
+            }
+            self.out.push(b')');
+        }
+    }
+    fn transforms(&mut self, ts: &[Transform]) {
+        for t in ts {
+            self.out.push(b' ');
+            self.s(t.op.flag());
+            self.nums(&t.args);
+        }
+    }
+
+    fn items(&mut self, items: &[Item], depth: usize) {
+        for it in items {
+            self.indent(depth);
+            self.item(it, depth);
+            self.out.push(b'\n');
+        }
+    }
+
+    fn item(&mut self, it: &Item, depth: usize) {
+        let m = self.m;
+        match it {
+            Item::Comment(c) => {
+                self.out.push(b'{');
+                self.s(c);
+                self.out.push(b'}');
+            }
+            Item::Material(id) => {
+                let mat = &m.materials[id.idx()];
+                match &mat.def {
+                    MaterialDef::Rgb(c) => {
+                        self.s("c_rgb ");
+                        self.s(&mat.name);
+                        self.nums(c);
+                        self.out.push(b';');
+                    }
+                    MaterialDef::Lhs(v) => {
+                        self.s("c ");
+                        self.s(&mat.name);
+                        self.nums(v);
+                        self.out.push(b';');
+                    }
+                    MaterialDef::Defmat(d) => {
+                        self.s("defmat ");
+                        self.s(&mat.name);
+                        self.s(";\n");
+                        if let Some(c) = d.diffuse {
+                            self.indent(depth + 1);
+                            self.s("diffuse_rgb");
+                            self.nums(&c);
+                            self.s(";\n");
+                        }
+                        if let Some(c) = d.emission {
+                            self.indent(depth + 1);
+                            self.s("emission_rgb");
+                            self.nums(&c);
+                            self.s(";\n");
+                        }
+                        for (k, words) in &d.other {
+                            self.indent(depth + 1);
+                            self.s(k);
+                            for w in words {
+                                self.out.push(b' ');
+                                self.s(w);
+                            }
+                            self.s(";\n");
+                        }
+                        self.indent(depth);
+                        self.s("end;");
+                    }
+                }
+            }
+            Item::Vertex(id) => {
+                let v = &m.vertices[id.idx()];
+                self.s("v ");
+                self.s(&v.name);
+                self.nums(&v.pos.to_array());
+                self.mat_suffix(v.color);
+                self.out.push(b';');
+            }
+            Item::Face(id) => {
+                let f = &m.faces[id.idx()];
+                self.out.push(b'f');
+                if let Some(n) = &f.name {
+                    self.out.push(b' ');
+                    self.s(n);
+                }
+                self.contours(&f.contours);
+                self.mat_suffix(f.material);
+                self.out.push(b';');
+            }
+            Item::Wire(id) => {
+                let w = &m.wires[id.idx()];
+                self.out.push(b'w');
+                if let Some(n) = &w.name {
+                    self.out.push(b' ');
+                    self.s(n);
+                }
+                self.contours(&w.polylines);
+                self.mat_suffix(w.material);
+                self.out.push(b';');
+            }
+            Item::Def(id) => {
+                let d = &m.defs[id.idx()];
+                self.s("def ");
+                self.s(&d.name);
+                self.s(";\n");
+                self.items(&d.items, depth + 1);
+                self.indent(depth);
+                self.s("end;");
+            }
+            Item::Instance(id) => {
+                let inst = &m.instances[id.idx()];
+                self.s(if inst.array.is_some() { "a" } else { "i" });
+                if let Some(n) = &inst.name {
+                    self.out.push(b' ');
+                    self.s(n);
+                }
+                self.s(" (");
+                self.s(&m.defs[inst.def.idx()].name);
+                self.mat_suffix(inst.color);
+                self.transforms(&inst.transforms);
+                self.out.push(b')');
+                if let Some(a) = &inst.array {
+                    self.out.push(b' ');
+                    self.s(&a.count.to_string());
+                    self.transforms(&a.step);
+                }
+                self.out.push(b';');
+            }
+            Item::Light(r) | Item::Camera(r) | Item::Unknown(r) => {
+                self.s(&r.keyword);
+                if !r.text.is_empty() {
+                    self.out.push(b' ');
+                    self.s(&r.text);
+                }
+                self.out.push(b';');
+            }
+            Item::Include(p) => {
+                self.s("include ");
+                self.s(p);
+                self.out.push(b';');
+            }
+            Item::Escape(e) => {
+                self.out.push(b'(');
+                self.s(e);
+                self.out.push(b')');
+            }
+        }
+    }
+}
