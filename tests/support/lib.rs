@@ -1,1 +1,75 @@
-//! Helpers for the end-to-end tests in `tests/`.
+//! Helpers for the end-to-end tests in `tests/`: run a built tool, compare
+//! with golden files (`UPDATE_GOLDEN=1` rewrites them).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+/// The workspace root (where `fixtures/` lives).
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A path under `fixtures/`.
+pub fn fixture(rel: &str) -> PathBuf {
+    root().join("fixtures").join(rel)
+}
+
+/// The path of a built tool binary (`target/<profile>/<name>`), next to the test executable.
+pub fn bin(name: &str) -> PathBuf {
+    let exe = std::env::current_exe().expect("test executable path");
+    // target/<profile>/deps/<test>-<hash>
+    let dir = exe.parent().and_then(Path::parent).expect("target profile directory");
+    let p = dir.join(format!("{name}{}", std::env::consts::EXE_SUFFIX));
+    assert!(p.exists(), "{} is not built; run `cargo test --workspace` (or `cargo build`) first", p.display());
+    p
+}
+
+/// Runs a tool with arguments and optional stdin; returns its output.
+pub fn run(name: &str, args: &[&str], stdin: Option<&[u8]>) -> Output {
+    let mut cmd = Command::new(bin(name));
+    cmd.args(args).stdout(Stdio::piped()).stderr(Stdio::piped());
+    cmd.stdin(if stdin.is_some() { Stdio::piped() } else { Stdio::null() });
+    let mut child = cmd.spawn().unwrap_or_else(|e| panic!("cannot start {name}: {e}"));
+    if let Some(input) = stdin {
+        let mut si = child.stdin.take().expect("stdin");
+        // The tool may exit before reading everything (e.g. on an early error).
+        let _ = si.write_all(input);
+    }
+    child.wait_with_output().expect("wait for tool")
+}
+
+/// Runs a tool and asserts it succeeded; returns stdout as a string.
+pub fn run_ok(name: &str, args: &[&str], stdin: Option<&[u8]>) -> String {
+    let out = run(name, args, stdin);
+    assert!(
+        out.status.success(),
+        "{name} {args:?} failed with {:?}\nstderr:\n{}",
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).expect("UTF-8 output")
+}
+
+/// Compares `actual` with the golden file at `path` (relative to the workspace root);
+/// with `UPDATE_GOLDEN=1` the file is (re)written instead.
+pub fn assert_golden(path: &str, actual: &str) {
+    let p = root().join(path);
+    if std::env::var_os("UPDATE_GOLDEN").is_some() {
+        if let Some(d) = p.parent() {
+            std::fs::create_dir_all(d).expect("create golden directory");
+        }
+        std::fs::write(&p, actual).expect("write golden file");
+        return;
+    }
+    let expected = std::fs::read_to_string(&p)
+        .unwrap_or_else(|e| panic!("missing golden file {} ({e}); run with UPDATE_GOLDEN=1", p.display()));
+    if expected != actual {
+        let first = expected.lines().zip(actual.lines()).position(|(a, b)| a != b);
+        panic!(
+            "output differs from golden file {} (first differing line: {:?})\n--- expected\n{expected}\n--- actual\n{actual}",
+            p.display(),
+            first.map(|k| k + 1)
+        );
+    }
+}
