@@ -19,18 +19,71 @@ pub fn fixture(rel: &str) -> PathBuf {
 pub fn bin(name: &str) -> PathBuf {
     let exe = std::env::current_exe().expect("test executable path");
     // target/<profile>/deps/<test>-<hash>
-    let dir = exe.parent().and_then(Path::parent).expect("target profile directory");
+    let dir = exe
+        .parent()
+        .and_then(Path::parent)
+        .expect("target profile directory");
     let p = dir.join(format!("{name}{}", std::env::consts::EXE_SUFFIX));
-    assert!(p.exists(), "{} is not built; run `cargo test --workspace` (or `cargo build`) first", p.display());
+    assert!(
+        p.exists(),
+        "{} is not built; run `cargo test --workspace` (or `cargo build`) first",
+        p.display()
+    );
+    // `cargo test -p ugkit` alone does not rebuild the tools: refuse stale ones.
+    let built = std::fs::metadata(&p)
+        .and_then(|m| m.modified())
+        .expect("binary mtime");
+    if let Some(src) = newest_source() {
+        assert!(
+            src <= built,
+            "{} is older than the sources; run `cargo build` or `cargo test --workspace`",
+            p.display()
+        );
+    }
     p
+}
+
+/// The newest modification time of the Rust sources of the libraries and tools.
+fn newest_source() -> Option<std::time::SystemTime> {
+    fn walk(dir: &Path, newest: &mut Option<std::time::SystemTime>) {
+        let Ok(rd) = std::fs::read_dir(dir) else {
+            return;
+        };
+        for e in rd.flatten() {
+            let path = e.path();
+            if path.is_dir() {
+                walk(&path, newest);
+            } else if path.extension().is_some_and(|x| x == "rs" || x == "wgsl")
+                && let Ok(t) = e.metadata().and_then(|m| m.modified())
+            {
+                *newest = Some(newest.map_or(t, |n| n.max(t)));
+            }
+        }
+    }
+    let mut newest = None;
+    for top in ["crates", "bins"] {
+        let Ok(rd) = std::fs::read_dir(root().join(top)) else {
+            continue;
+        };
+        for e in rd.flatten() {
+            walk(&e.path().join("src"), &mut newest);
+        }
+    }
+    newest
 }
 
 /// Runs a tool with arguments and optional stdin; returns its output.
 pub fn run(name: &str, args: &[&str], stdin: Option<&[u8]>) -> Output {
     let mut cmd = Command::new(bin(name));
     cmd.args(args).stdout(Stdio::piped()).stderr(Stdio::piped());
-    cmd.stdin(if stdin.is_some() { Stdio::piped() } else { Stdio::null() });
-    let mut child = cmd.spawn().unwrap_or_else(|e| panic!("cannot start {name}: {e}"));
+    cmd.stdin(if stdin.is_some() {
+        Stdio::piped()
+    } else {
+        Stdio::null()
+    });
+    let mut child = cmd
+        .spawn()
+        .unwrap_or_else(|e| panic!("cannot start {name}: {e}"));
     if let Some(input) = stdin {
         let mut si = child.stdin.take().expect("stdin");
         // The tool may exit before reading everything (e.g. on an early error).
@@ -62,10 +115,17 @@ pub fn assert_golden(path: &str, actual: &str) {
         std::fs::write(&p, actual).expect("write golden file");
         return;
     }
-    let expected = std::fs::read_to_string(&p)
-        .unwrap_or_else(|e| panic!("missing golden file {} ({e}); run with UPDATE_GOLDEN=1", p.display()));
+    let expected = std::fs::read_to_string(&p).unwrap_or_else(|e| {
+        panic!(
+            "missing golden file {} ({e}); run with UPDATE_GOLDEN=1",
+            p.display()
+        )
+    });
     if expected != actual {
-        let first = expected.lines().zip(actual.lines()).position(|(a, b)| a != b);
+        let first = expected
+            .lines()
+            .zip(actual.lines())
+            .position(|(a, b)| a != b);
         panic!(
             "output differs from golden file {} (first differing line: {:?})\n--- expected\n{expected}\n--- actual\n{actual}",
             p.display(),

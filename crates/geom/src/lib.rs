@@ -5,9 +5,12 @@
 //! (Shewchuk's adaptive arithmetic); constructions are plain f64.
 
 pub mod index;
+pub mod intersect;
+pub mod overlap;
 pub mod plane;
 pub mod polygon;
 pub mod predicates;
+pub mod triangulate;
 
 pub use glam::{DVec2, DVec3};
 pub use index::BoxIndex;

@@ -1,0 +1,720 @@
+//! The checks behind `ugcheck`: a model's counts, defects and topology.
+//!
+//! Defects (what the cleaning tools remove): non-planar faces, T-vertices,
+//! intersecting pairs, partially overlapping coplanar pairs, coincident faces,
+//! degenerate faces, and neighbours with inconsistent orientation.
+//! Topology facts (normal in open architectural models, deny-able): boundary
+//! edges, non-manifold edges, and faces that are not triangles or convex quads.
+//!
+//! Faces are named by their UG name or, when unnamed, `#k` (the k-th face of
+//! the file, from 1). Every list is in file order; the report is deterministic.
+
+use std::fmt::Write as _;
+
+use geom::intersect::{FaceGeom, Relation, relate};
+use geom::overlap::{overlap_area, region_area};
+use geom::{BoxIndex, DVec2, DVec3, Plane, orient2d, point_segment_distance};
+use rayon::prelude::*;
+use serde::Serialize;
+use ug::{FaceId, Model, VertexId};
+
+/// The categories `--deny` accepts.
+pub const CATEGORIES: [&str; 10] = [
+    "nonplanar",
+    "tvertex",
+    "intersect",
+    "overlap",
+    "coincident",
+    "degenerate",
+    "orientation",
+    "boundary",
+    "nonmanifold",
+    "nonpatch",
+];
+
+/// The categories that are defects (the rest are topology facts).
+pub const DEFECTS: [&str; 7] = [
+    "nonplanar",
+    "tvertex",
+    "intersect",
+    "overlap",
+    "coincident",
+    "degenerate",
+    "orientation",
+];
+
+#[derive(Serialize, Debug, Default, Clone, PartialEq)]
+pub struct Counts {
+    pub vertices: usize,
+    pub faces: usize,
+    pub contours: usize,
+    pub edges: usize,
+    pub materials: usize,
+    /// Faces whose material emits light.
+    pub emitters: usize,
+    pub wires: usize,
+}
+
+#[derive(Serialize, Debug, Clone, PartialEq)]
+pub struct NonPlanar {
+    pub face: String,
+    /// Largest distance of a vertex from the face's best-fit plane (model units).
+    pub deviation: f64,
+    /// `deviation` divided by the face's size (its bounding-box diagonal).
+    pub relative: f64,
+}
+
+#[derive(Serialize, Debug, Clone, PartialEq)]
+pub struct TVertex {
+    pub vertex: String,
+    /// The edge whose interior the vertex lies on.
+    pub edge: [String; 2],
+    /// Faces that use that edge without the vertex.
+    pub faces: Vec<String>,
+}
+
+#[derive(Serialize, Debug, Clone, PartialEq)]
+pub struct Pair {
+    pub a: String,
+    pub b: String,
+}
+
+#[derive(Serialize, Debug, Clone, PartialEq)]
+pub struct Overlap {
+    pub a: String,
+    pub b: String,
+    /// Area of the common region.
+    pub area: f64,
+}
+
+#[derive(Serialize, Debug, Clone, PartialEq)]
+pub struct Degenerate {
+    pub face: String,
+    pub reason: String,
+}
+
+#[derive(Serialize, Debug, Clone, PartialEq)]
+pub struct EdgeReport {
+    pub edge: [String; 2],
+    pub faces: Vec<String>,
+}
+
+#[derive(Serialize, Debug, Clone, PartialEq)]
+pub struct NonPatch {
+    pub face: String,
+    pub reason: String,
+}
+
+#[derive(Serialize, Debug, Clone, PartialEq)]
+pub struct MaterialArea {
+    pub material: String,
+    pub area: f64,
+}
+
+/// Everything `ugcheck` reports.
+#[derive(Serialize, Debug, Clone, PartialEq)]
+pub struct Report {
+    pub epsilon: f64,
+    pub counts: Counts,
+    pub nonplanar: Vec<NonPlanar>,
+    pub tvertices: Vec<TVertex>,
+    pub intersecting: Vec<Pair>,
+    pub overlapping: Vec<Overlap>,
+    pub coincident: Vec<Pair>,
+    pub degenerate: Vec<Degenerate>,
+    pub inconsistent: Vec<EdgeReport>,
+    pub boundary_edges: Vec<EdgeReport>,
+    pub nonmanifold_edges: Vec<EdgeReport>,
+    pub nonpatch: Vec<NonPatch>,
+    pub area_by_material: Vec<MaterialArea>,
+}
+
+impl Report {
+    /// Number of findings in a category (one of [`CATEGORIES`]).
+    pub fn count(&self, category: &str) -> usize {
+        match category {
+            "nonplanar" => self.nonplanar.len(),
+            "tvertex" => self.tvertices.len(),
+            "intersect" => self.intersecting.len(),
+            "overlap" => self.overlapping.len(),
+            "coincident" => self.coincident.len(),
+            "degenerate" => self.degenerate.len(),
+            "orientation" => self.inconsistent.len(),
+            "boundary" => self.boundary_edges.len(),
+            "nonmanifold" => self.nonmanifold_edges.len(),
+            "nonpatch" => self.nonpatch.len(),
+            _ => 0,
+        }
+    }
+
+    /// Total number of defects (not counting topology facts).
+    pub fn defects(&self) -> usize {
+        DEFECTS.iter().map(|c| self.count(c)).sum()
+    }
+}
+
+/// Formats a number compactly and deterministically for the text report.
+fn num(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    let a = v.abs();
+    if (1e-3..1e7).contains(&a) {
+        let s = format!("{v:.6}");
+        let s = s.trim_end_matches('0').trim_end_matches('.');
+        s.to_string()
+    } else {
+        format!("{v:.6e}")
+    }
+}
+
+const LIST_LIMIT: usize = 50;
+
+impl Report {
+    /// The human-readable report (at most 50 items listed per category unless `all`).
+    pub fn text(&self, all: bool) -> String {
+        let mut s = String::new();
+        let c = &self.counts;
+        let _ = writeln!(s, "epsilon: {}", num(self.epsilon));
+        let _ = writeln!(
+            s,
+            "counts: {} vertices, {} faces, {} contours, {} edges, {} materials, {} emitters, {} wires",
+            c.vertices, c.faces, c.contours, c.edges, c.materials, c.emitters, c.wires
+        );
+        let _ = writeln!(s, "defects: {}", self.defects());
+        let rows: [(&str, &str); 10] = [
+            ("nonplanar", "non-planar faces"),
+            ("tvertex", "T-vertices"),
+            ("intersect", "intersecting pairs"),
+            ("overlap", "overlapping coplanar pairs"),
+            ("coincident", "coincident pairs"),
+            ("degenerate", "degenerate faces"),
+            ("orientation", "inconsistently oriented edges"),
+            ("boundary", "boundary edges"),
+            ("nonmanifold", "non-manifold edges"),
+            ("nonpatch", "faces not triangles or convex quads"),
+        ];
+        for (k, (cat, label)) in rows.iter().enumerate() {
+            if k == 7 {
+                let _ = writeln!(s, "topology:");
+            }
+            let _ = writeln!(s, "  {label}: {}", self.count(cat));
+        }
+        let _ = writeln!(s, "area per material:");
+        for m in &self.area_by_material {
+            let _ = writeln!(s, "  {}: {}", m.material, num(m.area));
+        }
+        let limit = if all { usize::MAX } else { LIST_LIMIT };
+        let mut section = |title: &str, lines: Vec<String>| {
+            if lines.is_empty() {
+                return;
+            }
+            let _ = writeln!(s, "{title}:");
+            for l in lines.iter().take(limit) {
+                let _ = writeln!(s, "  {l}");
+            }
+            if lines.len() > limit {
+                let _ = writeln!(
+                    s,
+                    "  … {} more (--all lists everything)",
+                    lines.len() - limit
+                );
+            }
+        };
+        section(
+            "non-planar faces",
+            self.nonplanar
+                .iter()
+                .map(|n| {
+                    format!(
+                        "{}: deviation {} ({} of its size)",
+                        n.face,
+                        num(n.deviation),
+                        num(n.relative)
+                    )
+                })
+                .collect(),
+        );
+        section(
+            "T-vertices",
+            self.tvertices
+                .iter()
+                .map(|t| {
+                    format!(
+                        "{} on edge {}-{} of {}",
+                        t.vertex,
+                        t.edge[0],
+                        t.edge[1],
+                        t.faces.join(" ")
+                    )
+                })
+                .collect(),
+        );
+        section(
+            "intersecting pairs",
+            self.intersecting
+                .iter()
+                .map(|p| format!("{} {}", p.a, p.b))
+                .collect(),
+        );
+        section(
+            "overlapping coplanar pairs",
+            self.overlapping
+                .iter()
+                .map(|p| format!("{} {}: common area {}", p.a, p.b, num(p.area)))
+                .collect(),
+        );
+        section(
+            "coincident pairs",
+            self.coincident
+                .iter()
+                .map(|p| format!("{} {}", p.a, p.b))
+                .collect(),
+        );
+        section(
+            "degenerate faces",
+            self.degenerate
+                .iter()
+                .map(|d| format!("{}: {}", d.face, d.reason))
+                .collect(),
+        );
+        let edges = |v: &[EdgeReport]| -> Vec<String> {
+            v.iter()
+                .map(|e| format!("{}-{}: {}", e.edge[0], e.edge[1], e.faces.join(" ")))
+                .collect()
+        };
+        section("inconsistently oriented edges", edges(&self.inconsistent));
+        section("non-manifold edges", edges(&self.nonmanifold_edges));
+        section("boundary edges", edges(&self.boundary_edges));
+        section(
+            "faces not triangles or convex quads",
+            self.nonpatch
+                .iter()
+                .map(|n| format!("{}: {}", n.face, n.reason))
+                .collect(),
+        );
+        s
+    }
+}
+
+struct Ctx<'m> {
+    m: &'m Model,
+    eps: f64,
+    faces: Vec<FaceId>,
+    labels: Vec<String>,
+    /// Position of each face id in `faces` (usize::MAX for faces not at the top level).
+    order: Vec<usize>,
+}
+
+impl Ctx<'_> {
+    fn label(&self, f: FaceId) -> &str {
+        &self.labels[self.order[f.idx()]]
+    }
+    fn vname(&self, v: VertexId) -> String {
+        self.m.vertices[v.idx()].name.clone()
+    }
+    fn points(&self, f: FaceId) -> Vec<Vec<DVec3>> {
+        self.m.faces[f.idx()]
+            .contours
+            .iter()
+            .map(|c| c.iter().map(|&v| self.m.pos(v)).collect())
+            .collect()
+    }
+}
+
+/// Checks a flat model (call `Model::flatten` first) with distance tolerance `eps`.
+pub fn check(m: &Model, eps: f64) -> Report {
+    let faces: Vec<FaceId> = m.top_faces().collect();
+    let mut order = vec![usize::MAX; m.faces.len()];
+    let labels: Vec<String> = faces
+        .iter()
+        .enumerate()
+        .map(|(k, &f)| {
+            order[f.idx()] = k;
+            m.faces[f.idx()]
+                .name
+                .clone()
+                .unwrap_or_else(|| format!("#{}", k + 1))
+        })
+        .collect();
+    let cx = Ctx {
+        m,
+        eps,
+        faces,
+        labels,
+        order,
+    };
+
+    let mesh = winged::Mesh::from_model(m.clone());
+    let edge_faces = |e: winged::EdgeId| -> Vec<String> {
+        let mut v: Vec<String> = mesh
+            .edge(e)
+            .uses
+            .iter()
+            .map(|u| cx.label(u.face).to_string())
+            .collect();
+        v.dedup();
+        v
+    };
+    let edge_report = |e: winged::EdgeId| {
+        let ed = mesh.edge(e);
+        EdgeReport {
+            edge: [cx.vname(ed.v[0]), cx.vname(ed.v[1])],
+            faces: edge_faces(e),
+        }
+    };
+
+    // Counts.
+    let emitters = cx
+        .faces
+        .iter()
+        .filter(|&&f| {
+            m.faces[f.idx()]
+                .material
+                .is_some_and(|mm| m.material(mm).is_emitter())
+        })
+        .count();
+    let counts = Counts {
+        vertices: m.top_vertices().count(),
+        faces: cx.faces.len(),
+        contours: cx
+            .faces
+            .iter()
+            .map(|&f| m.faces[f.idx()].contours.len())
+            .sum(),
+        edges: mesh.edges().count(),
+        materials: m.materials.len(),
+        emitters,
+        wires: m
+            .items
+            .iter()
+            .filter(|i| matches!(i, ug::Item::Wire(_)))
+            .count(),
+    };
+
+    // Per-face checks.
+    let per_face: Vec<(
+        Option<Degenerate>,
+        Option<NonPlanar>,
+        Option<NonPatch>,
+        Option<FaceGeom>,
+    )> = cx.faces.par_iter().map(|&f| face_checks(&cx, f)).collect();
+    let mut degenerate = Vec::new();
+    let mut nonplanar = Vec::new();
+    let mut nonpatch = Vec::new();
+    let mut geoms = Vec::with_capacity(per_face.len());
+    for (d, n, p, g) in per_face {
+        degenerate.extend(d);
+        nonplanar.extend(n);
+        nonpatch.extend(p);
+        geoms.push(g);
+    }
+
+    // Edge topology.
+    let mut inconsistent = Vec::new();
+    let mut boundary_edges = Vec::new();
+    let mut nonmanifold_edges = Vec::new();
+    for e in mesh.edges() {
+        let uses = mesh.edge(e).uses.len();
+        if uses == 1 {
+            boundary_edges.push(edge_report(e));
+        } else if uses > 2 {
+            nonmanifold_edges.push(edge_report(e));
+        } else if !mesh.consistently_oriented(e) {
+            inconsistent.push(edge_report(e));
+        }
+    }
+
+    let tvertices = t_vertices(&cx, &mesh, &geoms);
+    let (intersecting, overlapping, coincident) = pairs(&cx, &geoms);
+
+    // Area per material, in material order, then faces without one.
+    let mut areas = vec![0.0; m.materials.len() + 1];
+    let mut used = vec![false; m.materials.len() + 1];
+    for (k, &f) in cx.faces.iter().enumerate() {
+        let slot = m.faces[f.idx()]
+            .material
+            .map_or(m.materials.len(), |mm| mm.idx());
+        used[slot] = true;
+        if geoms[k].is_some() {
+            areas[slot] += geom::face_area(&cx.points(f)).abs();
+        }
+    }
+    let area_by_material = (0..=m.materials.len())
+        .filter(|&k| used[k])
+        .map(|k| MaterialArea {
+            material: m
+                .materials
+                .get(k)
+                .map_or_else(|| "(none)".to_string(), |mm| mm.name.clone()),
+            area: areas[k],
+        })
+        .collect();
+
+    Report {
+        epsilon: eps,
+        counts,
+        nonplanar,
+        tvertices,
+        intersecting,
+        overlapping,
+        coincident,
+        degenerate,
+        inconsistent,
+        boundary_edges,
+        nonmanifold_edges,
+        nonpatch,
+        area_by_material,
+    }
+}
+
+fn face_checks(
+    cx: &Ctx<'_>,
+    f: FaceId,
+) -> (
+    Option<Degenerate>,
+    Option<NonPlanar>,
+    Option<NonPatch>,
+    Option<FaceGeom>,
+) {
+    let face = &cx.m.faces[f.idx()];
+    let label = cx.label(f).to_string();
+    let pts = cx.points(f);
+    let eps = cx.eps;
+    // Degeneracy.
+    let mut reason = None;
+    for (ci, c) in face.contours.iter().enumerate() {
+        let n = c.len();
+        let mut distinct: Vec<VertexId> = c.clone();
+        distinct.sort_unstable();
+        distinct.dedup();
+        if distinct.len() < 3 {
+            reason = Some(format!(
+                "contour {} has fewer than 3 distinct vertices",
+                ci + 1
+            ));
+            break;
+        }
+        if let Some(i) = (0..n).find(|&i| c[i] == c[(i + 1) % n]) {
+            reason = Some(format!(
+                "contour {} repeats vertex {} consecutively",
+                ci + 1,
+                cx.vname(c[i])
+            ));
+            break;
+        }
+        if let Some(i) = (0..n).find(|&i| (pts[ci][i] - pts[ci][(i + 1) % n]).length() <= eps) {
+            reason = Some(format!(
+                "contour {} has a zero-length edge {}-{}",
+                ci + 1,
+                cx.vname(c[i]),
+                cx.vname(c[(i + 1) % n])
+            ));
+            break;
+        }
+    }
+    let (lo, hi) = geom::index::bbox(pts.iter().flatten().copied(), 0.0);
+    let size = (hi - lo).length();
+    let outer_area = geom::newell_normal(&pts[0]).length() / 2.0;
+    if reason.is_none() && outer_area <= eps * size {
+        reason = Some("zero area (its vertices are collinear)".to_string());
+    }
+    if let Some(r) = reason {
+        return (
+            Some(Degenerate {
+                face: label,
+                reason: r,
+            }),
+            None,
+            None,
+            None,
+        );
+    }
+    // Planarity against the best-fit plane of all contours' outer normal.
+    let plane = Plane::fit(&pts[0]);
+    let mut np = None;
+    if let Some(pl) = plane {
+        let dev = pts
+            .iter()
+            .flatten()
+            .map(|&p| pl.dist(p).abs())
+            .fold(0.0, f64::max);
+        if dev > eps {
+            np = Some(NonPlanar {
+                face: label.clone(),
+                deviation: dev,
+                relative: dev / size,
+            });
+        }
+    }
+    // Patch shape.
+    let outer = &face.contours[0];
+    let patch = if face.contours.len() > 1 {
+        Some(format!(
+            "{} contours (holes or islands)",
+            face.contours.len()
+        ))
+    } else if outer.len() > 4 {
+        Some(format!("{} vertices", outer.len()))
+    } else if outer.len() == 4 {
+        let g = FaceGeom::new(pts.clone());
+        let convex = g.is_some_and(|g| {
+            let c = &g.contours_2d[0];
+            (0..4).all(|i| orient2d(c[i], c[(i + 1) % 4], c[(i + 2) % 4]) > 0)
+        });
+        (!convex).then(|| "quadrilateral is not convex".to_string())
+    } else {
+        None
+    };
+    let patch = patch.map(|reason| NonPatch {
+        face: label,
+        reason,
+    });
+    (None, np, patch, FaceGeom::new(pts))
+}
+
+/// T-vertices among the non-degenerate faces (`geoms[k]` is `None` for a
+/// degenerate face: its own collinear vertices are not T-vertices).
+fn t_vertices(cx: &Ctx<'_>, mesh: &winged::Mesh, geoms: &[Option<FaceGeom>]) -> Vec<TVertex> {
+    let m = cx.m;
+    let eps = cx.eps;
+    let sound = |f: FaceId| geoms[cx.order[f.idx()]].is_some();
+    let mut used: Vec<VertexId> = cx
+        .faces
+        .iter()
+        .filter(|&&f| sound(f))
+        .flat_map(|&f| m.faces[f.idx()].contours.iter().flatten().copied())
+        .collect();
+    used.sort_unstable();
+    used.dedup();
+    let index = BoxIndex::new(used.iter().map(|&v| {
+        let p = m.pos(v);
+        (p - DVec3::splat(eps), p + DVec3::splat(eps), v.0)
+    }));
+    let edges: Vec<winged::EdgeId> = mesh
+        .edges()
+        .filter(|&e| mesh.edge(e).uses.iter().any(|u| sound(u.face)))
+        .collect();
+    let found: Vec<Vec<TVertex>> = edges
+        .par_iter()
+        .map(|&e| {
+            let ed = mesh.edge(e);
+            let (a, b) = (m.pos(ed.v[0]), m.pos(ed.v[1]));
+            let (lo, hi) = (a.min(b) - DVec3::splat(eps), a.max(b) + DVec3::splat(eps));
+            let mut out = Vec::new();
+            for id in index.query(lo, hi) {
+                let v = VertexId(id);
+                if v == ed.v[0] || v == ed.v[1] {
+                    continue;
+                }
+                let p = m.pos(v);
+                if (p - a).length() <= eps || (p - b).length() <= eps {
+                    continue;
+                }
+                let (d, _) = point_segment_distance(p, a, b);
+                if d <= eps {
+                    let mut faces: Vec<String> = ed
+                        .uses
+                        .iter()
+                        .map(|u| cx.label(u.face).to_string())
+                        .collect();
+                    faces.dedup();
+                    out.push(TVertex {
+                        vertex: cx.vname(v),
+                        edge: [cx.vname(ed.v[0]), cx.vname(ed.v[1])],
+                        faces,
+                    });
+                }
+            }
+            out
+        })
+        .collect();
+    found.into_iter().flatten().collect()
+}
+
+type PairLists = (Vec<Pair>, Vec<Overlap>, Vec<Pair>);
+
+fn pairs(cx: &Ctx<'_>, geoms: &[Option<FaceGeom>]) -> PairLists {
+    let eps = cx.eps;
+    let boxes: Vec<(DVec3, DVec3, u32)> = geoms
+        .iter()
+        .enumerate()
+        .filter_map(|(k, g)| {
+            g.as_ref().map(|g| {
+                let (lo, hi) = geom::index::bbox(g.contours.iter().flatten().copied(), eps);
+                (lo, hi, k as u32)
+            })
+        })
+        .collect();
+    let index = BoxIndex::new(boxes.iter().copied());
+    let per: Vec<PairLists> = boxes
+        .par_iter()
+        .map(|&(lo, hi, i)| {
+            let mut inter = Vec::new();
+            let mut over = Vec::new();
+            let mut coin = Vec::new();
+            let ga = geoms[i as usize]
+                .as_ref()
+                .expect("indexed faces have geometry");
+            for j in index.query(lo, hi) {
+                if j <= i {
+                    continue;
+                }
+                let gb = geoms[j as usize]
+                    .as_ref()
+                    .expect("indexed faces have geometry");
+                let (la, lb) = (cx.labels[i as usize].clone(), cx.labels[j as usize].clone());
+                match relate(ga, gb, eps) {
+                    Relation::Intersect => inter.push(Pair { a: la, b: lb }),
+                    Relation::Coplanar => {
+                        let a2: &[Vec<DVec2>] = &ga.contours_2d;
+                        let b2: Vec<Vec<DVec2>> = gb
+                            .contours
+                            .iter()
+                            .map(|c| c.iter().map(|&p| ga.frame.to_2d(p)).collect())
+                            .collect();
+                        let ov = overlap_area(a2, &b2);
+                        let per_a: f64 = perimeter(a2);
+                        let per_b: f64 = perimeter(&b2);
+                        let tol = eps * (per_a + per_b);
+                        if ov > tol {
+                            let (area_a, area_b) = (region_area(a2), region_area(&b2));
+                            let same_region =
+                                (area_a - ov).abs() <= tol && (area_b - ov).abs() <= tol;
+                            let same_side = ga.plane.n.dot(gb.plane.n) > 0.0;
+                            if same_region && same_side {
+                                coin.push(Pair { a: la, b: lb });
+                            } else if !same_region {
+                                over.push(Overlap {
+                                    a: la,
+                                    b: lb,
+                                    area: ov,
+                                });
+                            }
+                            // Same region facing opposite ways: a thin wall's two sides; fine.
+                        }
+                    }
+                    Relation::Disjoint | Relation::Touch => {}
+                }
+            }
+            (inter, over, coin)
+        })
+        .collect();
+    let mut out: PairLists = Default::default();
+    for (a, b, c) in per {
+        out.0.extend(a);
+        out.1.extend(b);
+        out.2.extend(c);
+    }
+    out
+}
+
+fn perimeter(c: &[Vec<DVec2>]) -> f64 {
+    c.iter()
+        .map(|r| {
+            (0..r.len())
+                .map(|i| (r[(i + 1) % r.len()] - r[i]).length())
+                .sum::<f64>()
+        })
+        .sum()
+}

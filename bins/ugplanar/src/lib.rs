@@ -1,0 +1,237 @@
+//! Non-planar face tessellation (Smith 1991, §2.2).
+//!
+//! A face is non-planar when one of its vertices lies farther than epsilon
+//! from the face's best-fit plane (the Newell normal of its outer contour
+//! through the centroid of its vertices). Such a face is replaced, in place,
+//! by triangles that keep its material and orientation:
+//!
+//! * a quadrilateral is split along the diagonal that folds it least (the
+//!   smaller angle between the two triangles' normals), never along a
+//!   diagonal that lies outside the quad;
+//! * anything larger, holes included, gets the constrained Delaunay
+//!   triangulation (spade) of its contours projected on the best-fit plane:
+//!   no new vertices, and the most regular triangles those vertices allow.
+//!
+//! Triangles are named `NAME.1`, `NAME.2`, … after their face (unnamed faces
+//! give unnamed triangles). Planar faces and all other statements pass
+//! through unchanged.
+
+use geom::triangulate::triangulate_polygon;
+use geom::{DVec3, Frame, Plane, newell_normal};
+use rustc_hash::FxHashSet;
+use ug::{Face, FaceId, Item, Model, VertexId};
+
+/// What the tessellation did.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Stats {
+    pub faces: usize,
+    pub nonplanar: usize,
+    pub triangles: usize,
+    /// Non-planar faces that could not be triangulated (their projection
+    /// self-intersects); they pass through unchanged with a warning.
+    pub failed: Vec<String>,
+}
+
+/// Largest distance of a face's vertices from its best-fit plane, and that plane.
+pub fn deviation(m: &Model, f: &Face) -> Option<(f64, Plane)> {
+    let outer: Vec<DVec3> = f.contours.first()?.iter().map(|&v| m.pos(v)).collect();
+    let n = newell_normal(&outer);
+    let len = n.length();
+    if len == 0.0 || !len.is_finite() {
+        return None;
+    }
+    let n = n / len;
+    let all: Vec<DVec3> = f.contours.iter().flatten().map(|&v| m.pos(v)).collect();
+    let c = all.iter().copied().sum::<DVec3>() / all.len() as f64;
+    let plane = Plane { n, d: n.dot(c) };
+    let dev = all.iter().map(|&p| plane.dist(p).abs()).fold(0.0, f64::max);
+    Some((dev, plane))
+}
+
+/// Triangles for a non-planar face, as vertex triples in the face's orientation.
+pub fn tessellate(m: &Model, f: &Face, plane: &Plane) -> Option<Vec<[VertexId; 3]>> {
+    let p = |v: VertexId| m.pos(v);
+    if f.contours.len() == 1 && f.contours[0].len() == 4 {
+        let q = &f.contours[0];
+        let options = [
+            [[q[0], q[1], q[2]], [q[0], q[2], q[3]]],
+            [[q[0], q[1], q[3]], [q[1], q[2], q[3]]],
+        ];
+        let normal = |t: &[VertexId; 3]| (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0]));
+        let mut best: Option<(f64, usize)> = None;
+        for (k, tris) in options.iter().enumerate() {
+            let (n0, n1) = (normal(&tris[0]), normal(&tris[1]));
+            // Both triangles must face the face's side (else the diagonal is outside).
+            if n0.dot(plane.n) <= 0.0 || n1.dot(plane.n) <= 0.0 {
+                continue;
+            }
+            let fold = n0.normalize().dot(n1.normalize()).clamp(-1.0, 1.0).acos();
+            if best.is_none_or(|(b, _)| fold < b) {
+                best = Some((fold, k));
+            }
+        }
+        if let Some((_, k)) = best {
+            return Some(options[k].to_vec());
+        }
+    }
+    let frame = Frame::new(p(f.contours[0][0]), plane.n);
+    let c2: Vec<Vec<geom::DVec2>> = f
+        .contours
+        .iter()
+        .map(|c| c.iter().map(|&v| frame.to_2d(p(v))).collect())
+        .collect();
+    let ids: Vec<VertexId> = f.contours.iter().flatten().copied().collect();
+    let tris = triangulate_polygon(&c2)?;
+    Some(
+        tris.into_iter()
+            .map(|t| [ids[t[0]], ids[t[1]], ids[t[2]]])
+            .collect(),
+    )
+}
+
+/// Replaces every face that deviates from its plane by more than `eps` with triangles.
+pub fn planarize(m: &Model, eps: f64) -> (Model, Stats) {
+    let mut stats = Stats::default();
+    let mut names: FxHashSet<String> = m.faces.iter().filter_map(|f| f.name.clone()).collect();
+    names.extend(m.wires.iter().filter_map(|w| w.name.clone()));
+    let mut out = Model {
+        materials: m.materials.clone(),
+        vertices: m.vertices.clone(),
+        wires: m.wires.clone(),
+        defs: m.defs.clone(),
+        instances: m.instances.clone(),
+        ..Model::default()
+    };
+    for it in &m.items {
+        let Item::Face(fid) = it else {
+            out.items.push(it.clone());
+            continue;
+        };
+        let f = &m.faces[fid.idx()];
+        stats.faces += 1;
+        let tris = match deviation(m, f) {
+            Some((dev, plane)) if dev > eps => {
+                stats.nonplanar += 1;
+                let t = tessellate(m, f, &plane);
+                if t.is_none() {
+                    stats.failed.push(
+                        f.name
+                            .clone()
+                            .unwrap_or_else(|| format!("#{}", stats.faces)),
+                    );
+                }
+                t
+            }
+            _ => None,
+        };
+        match tris {
+            None => {
+                push_face(&mut out, f.clone());
+            }
+            Some(tris) => {
+                stats.triangles += tris.len();
+                let mut k = 0;
+                for t in tris {
+                    let name = f.name.as_ref().map(|n| {
+                        loop {
+                            k += 1;
+                            let cand = format!("{n}.{k}");
+                            if names.insert(cand.clone()) {
+                                break cand;
+                            }
+                        }
+                    });
+                    push_face(
+                        &mut out,
+                        Face {
+                            name,
+                            contours: vec![t.to_vec()],
+                            material: f.material,
+                        },
+                    );
+                }
+            }
+        }
+    }
+    (out, stats)
+}
+
+fn push_face(out: &mut Model, f: Face) -> FaceId {
+    let id = FaceId(out.faces.len() as u32);
+    out.faces.push(f);
+    out.items.push(Item::Face(id));
+    id
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn model(src: &str) -> Model {
+        ug::parse(src.as_bytes(), "t").unwrap().model
+    }
+
+    #[test]
+    fn quad_splits_along_the_smaller_fold() {
+        // c is lifted: the fold along a-c is zero only if … compute both.
+        let m = model("v a 0 0 0; v b 1 0 0; v c 1 1 0.5; v d 0 1 0; f q (a b c d);");
+        let (out, st) = planarize(&m, 1e-9);
+        assert_eq!(st.nonplanar, 1);
+        assert_eq!(out.faces.len(), 2);
+        // Splitting along b-d keeps a, b, d in the ground plane (fold = atan(0.5)·…);
+        // along a-c both triangles tilt. The b-d diagonal folds less here.
+        let names: Vec<_> = out.faces.iter().map(|f| f.name.clone().unwrap()).collect();
+        assert_eq!(names, ["q.1", "q.2"]);
+        let has_bd = out.faces.iter().all(|f| {
+            let c = &f.contours[0];
+            c.contains(&VertexId(1)) && c.contains(&VertexId(3))
+        });
+        assert!(has_bd, "{:?}", out.faces);
+    }
+
+    #[test]
+    fn planar_faces_pass_through() {
+        let src = "v a 0 0 0; v b 1 0 0; v c 1 1 0; v d 0 1 0; f q (a b c d);";
+        let m = model(src);
+        let (out, st) = planarize(&m, 1e-9);
+        assert_eq!(st.nonplanar, 0);
+        assert_eq!(out, m);
+    }
+
+    #[test]
+    fn triangles_keep_orientation_and_area() {
+        let m = model(
+            "v a 0 0 0; v b 4 0 0; v c 4 4 0.3; v d 0 4 0; v e -1 2 0.1;\
+             v h0 1 1 0; v h1 1 3 0; v h2 3 3 0; v h3 3 1 0; c_rgb g 0.5 0.5 0.5;\
+             f p (a b c d e) (h0 h1 h2 h3) g;",
+        );
+        let (out, st) = planarize(&m, 1e-9);
+        assert_eq!(st.nonplanar, 1);
+        let n = deviation(&m, &m.faces[0]).unwrap().1.n;
+        let mut area = 0.0;
+        for f in &out.faces {
+            let p: Vec<DVec3> = f.contours[0].iter().map(|&v| out.pos(v)).collect();
+            let tn = (p[1] - p[0]).cross(p[2] - p[0]);
+            assert!(tn.dot(n) > 0.0, "triangle faces the other way");
+            assert_eq!(f.material, m.faces[0].material);
+            // Projected area onto the best-fit plane.
+            area += tn.dot(n) / 2.0;
+        }
+        let frame = Frame::new(DVec3::ZERO, n);
+        let c2: Vec<Vec<geom::DVec2>> = m.faces[0]
+            .contours
+            .iter()
+            .map(|c| c.iter().map(|&v| frame.to_2d(m.pos(v))).collect())
+            .collect();
+        let expect: f64 = c2.iter().map(|c| geom::signed_area_2d(c)).sum();
+        assert!((area - expect).abs() < 1e-9, "{area} vs {expect}");
+    }
+
+    #[test]
+    fn derived_names_avoid_existing_ones() {
+        let m = model("v a 0 0 0; v b 1 0 0; v c 1 1 1; v d 0 1 0; f q.1 (a b d); f q (a b c d);");
+        let (out, _) = planarize(&m, 1e-9);
+        let names: Vec<_> = out.faces.iter().map(|f| f.name.clone().unwrap()).collect();
+        assert_eq!(names, ["q.1", "q.2", "q.3"]);
+    }
+}
