@@ -29,47 +29,25 @@ pub fn bin(name: &str) -> PathBuf {
         "{} is not built; run `cargo test --workspace` (or `cargo build`) first",
         p.display()
     );
-    // `cargo test -p ugkit` alone does not rebuild the tools: refuse stale ones.
+    // `cargo test -p ugkit` alone does not rebuild the tools: refuse a binary
+    // older than any source it was built from (cargo's dep-info file lists them).
     let built = std::fs::metadata(&p)
         .and_then(|m| m.modified())
         .expect("binary mtime");
-    if let Some(src) = newest_source() {
-        assert!(
-            src <= built,
-            "{} is older than the sources; run `cargo build` or `cargo test --workspace`",
-            p.display()
-        );
-    }
-    p
-}
-
-/// The newest modification time of the Rust sources of the libraries and tools.
-fn newest_source() -> Option<std::time::SystemTime> {
-    fn walk(dir: &Path, newest: &mut Option<std::time::SystemTime>) {
-        let Ok(rd) = std::fs::read_dir(dir) else {
-            return;
-        };
-        for e in rd.flatten() {
-            let path = e.path();
-            if path.is_dir() {
-                walk(&path, newest);
-            } else if path.extension().is_some_and(|x| x == "rs" || x == "wgsl")
-                && let Ok(t) = e.metadata().and_then(|m| m.modified())
-            {
-                *newest = Some(newest.map_or(t, |n| n.max(t)));
+    if let Ok(deps) = std::fs::read_to_string(dir.join(format!("{name}.d"))) {
+        let first = deps.lines().next().unwrap_or("");
+        let files = first.split_once(": ").map_or("", |(_, f)| f);
+        for f in files.split(' ').filter(|f| !f.is_empty()) {
+            if let Ok(t) = std::fs::metadata(f).and_then(|m| m.modified()) {
+                assert!(
+                    t <= built,
+                    "{} is older than {f}; run `cargo build` or `cargo test --workspace`",
+                    p.display()
+                );
             }
         }
     }
-    let mut newest = None;
-    for top in ["crates", "bins"] {
-        let Ok(rd) = std::fs::read_dir(root().join(top)) else {
-            continue;
-        };
-        for e in rd.flatten() {
-            walk(&e.path().join("src"), &mut newest);
-        }
-    }
-    newest
+    p
 }
 
 /// Runs a tool with arguments and optional stdin; returns its output.

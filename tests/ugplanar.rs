@@ -1,0 +1,104 @@
+//! ugplanar end to end: non-planar faces become triangles, nothing else changes.
+
+use ugkit::{fixture, run, run_ok};
+
+fn check(ug: &str) -> serde_json::Value {
+    serde_json::from_str(&run_ok("ugcheck", &["--json"], Some(ug.as_bytes()))).unwrap()
+}
+
+fn area(report: &serde_json::Value, material: &str) -> f64 {
+    report["area_by_material"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["material"] == material)
+        .and_then(|m| m["area"].as_f64())
+        .unwrap()
+}
+
+#[test]
+fn warped_faces_are_tessellated_and_planar_ones_kept() {
+    let path = fixture("planar/warped.ug");
+    let before = check(&std::fs::read_to_string(&path).unwrap());
+    assert_eq!(before["nonplanar"].as_array().unwrap().len(), 2);
+    let out = run_ok("ugplanar", &[path.to_str().unwrap()], None);
+    let after = check(&out);
+    for key in [
+        "nonplanar",
+        "tvertices",
+        "intersecting",
+        "overlapping",
+        "coincident",
+        "degenerate",
+        "inconsistent",
+    ] {
+        assert_eq!(
+            after[key].as_array().unwrap().len(),
+            0,
+            "{key} after ugplanar: {}",
+            after[key]
+        );
+    }
+    let faces: Vec<&str> = out.lines().filter(|l| l.starts_with("f ")).collect();
+    assert_eq!(faces.len(), 2 + 8 + 1, "{out}");
+    assert!(
+        faces.contains(&"f roof.1 (r0 r1 r3) roof;"),
+        "quad split along the smaller fold: {out}"
+    );
+    assert!(faces.contains(&"f wall (w0 w1 w2 w3) wall;"));
+    assert!(
+        faces
+            .iter()
+            .filter(|f| f.starts_with("f window."))
+            .all(|f| f.ends_with(" frame;"))
+    );
+    // The wall is untouched; the tessellated surfaces keep their area to within
+    // the change that flattening a sagging corner implies (a few percent).
+    assert_eq!(area(&after, "wall"), 12.0);
+    for m in ["roof", "frame"] {
+        let (a, b) = (area(&before, m), area(&after, m));
+        assert!((a - b).abs() / a < 0.05, "{m}: {a} → {b}");
+    }
+}
+
+#[test]
+fn planar_model_passes_through_exactly_as_ugcat_writes_it() {
+    for name in ["check/clean-box.ug", "red-cube.ug", "check/nonpatch.ug"] {
+        let p = fixture(name);
+        let p = p.to_str().unwrap();
+        assert_eq!(
+            run_ok("ugplanar", &[p], None),
+            run_ok("ugcat", &[p], None),
+            "{name}"
+        );
+    }
+}
+
+#[test]
+fn output_is_deterministic_and_idempotent() {
+    let p = fixture("planar/warped.ug");
+    let a = run_ok("ugplanar", &[p.to_str().unwrap()], None);
+    let b = run_ok("ugplanar", &[p.to_str().unwrap()], None);
+    assert_eq!(a, b);
+    let again = run_ok("ugplanar", &[], Some(a.as_bytes()));
+    assert_eq!(again, a, "a second pass changes nothing");
+}
+
+#[test]
+fn explicit_epsilon_leaves_slightly_warped_faces() {
+    let p = fixture("check/nonplanar.ug"); // deviation 0.0495
+    let p = p.to_str().unwrap();
+    let loose = run_ok("ugplanar", &["-e", "0.1", p], None);
+    assert_eq!(loose, run_ok("ugcat", &[p], None));
+    let strict = run_ok("ugplanar", &["-e", "0.01", p], None);
+    assert_eq!(strict.lines().filter(|l| l.starts_with("f ")).count(), 2);
+}
+
+#[test]
+fn bad_input_is_reported_with_position_and_nothing_on_stdout() {
+    let out = run("ugplanar", &[], Some(b"v a 0 0 0;\nf (a b c);\n"));
+    assert_eq!(out.status.code(), Some(2));
+    assert!(out.stdout.is_empty());
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(err, "<stdin>:2:6: error: face names undefined vertex 'b'\n");
+}
