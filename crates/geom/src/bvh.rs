@@ -1,0 +1,291 @@
+//! A bounding-volume hierarchy over triangles for ray casting (f64).
+//!
+//! Built top-down by splitting at the median centroid along the longest axis
+//! of the node's centroid bounds; leaves hold at most four triangles. Rays
+//! are intersected with Möller–Trumbore in f64.
+
+use glam::DVec3;
+
+use crate::polygon::Projected;
+use crate::triangulate::triangulate_polygon;
+
+/// A triangle tagged with the id of what it belongs to (e.g. a face).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Triangle {
+    pub p: [DVec3; 3],
+    pub id: u32,
+}
+
+/// The nearest hit of a ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Ray parameter: the hit point is `origin + t·dir`.
+    pub t: f64,
+    /// The id of the triangle that was hit.
+    pub id: u32,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    lo: DVec3,
+    hi: DVec3,
+    /// Leaf: index of the first triangle; inner node: index of the left child (right = left + 1).
+    first: u32,
+    /// Number of triangles in a leaf; 0 for an inner node.
+    count: u32,
+}
+
+/// A BVH over triangles.
+#[derive(Clone, Debug)]
+pub struct Bvh {
+    nodes: Vec<Node>,
+    tris: Vec<Triangle>,
+}
+
+const LEAF: usize = 4;
+
+impl Bvh {
+    pub fn new(mut tris: Vec<Triangle>) -> Bvh {
+        let mut nodes = Vec::with_capacity(2 * tris.len() / LEAF + 1);
+        if tris.is_empty() {
+            return Bvh { nodes, tris };
+        }
+        nodes.push(Node { lo: DVec3::ZERO, hi: DVec3::ZERO, first: 0, count: 0 });
+        // (node index, start, end)
+        let mut stack = vec![(0usize, 0usize, tris.len())];
+        while let Some((ni, s, e)) = stack.pop() {
+            let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+            let (mut clo, mut chi) = (lo, hi);
+            for t in &tris[s..e] {
+                for p in t.p {
+                    lo = lo.min(p);
+                    hi = hi.max(p);
+                }
+                let c = centroid(t);
+                clo = clo.min(c);
+                chi = chi.max(c);
+            }
+            nodes[ni].lo = lo;
+            nodes[ni].hi = hi;
+            let ext = chi - clo;
+            if e - s <= LEAF || ext.max_element() <= 0.0 {
+                nodes[ni].first = s as u32;
+                nodes[ni].count = (e - s) as u32;
+                continue;
+            }
+            let axis = if ext.x >= ext.y && ext.x >= ext.z {
+                0
+            } else if ext.y >= ext.z {
+                1
+            } else {
+                2
+            };
+            let mid = (s + e) / 2;
+            tris[s..e].select_nth_unstable_by(mid - s, |a, b| centroid(a)[axis].total_cmp(&centroid(b)[axis]));
+            let left = nodes.len();
+            nodes.push(Node { lo, hi, first: 0, count: 0 });
+            nodes.push(Node { lo, hi, first: 0, count: 0 });
+            nodes[ni].first = left as u32;
+            nodes[ni].count = 0;
+            stack.push((left, s, mid));
+            stack.push((left + 1, mid, e));
+        }
+        Bvh { nodes, tris }
+    }
+
+    pub fn len(&self) -> usize {
+        self.tris.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.tris.is_empty()
+    }
+
+    /// The nearest hit with `tmin < t < tmax` among triangles whose id passes `keep`.
+    pub fn intersect(&self, origin: DVec3, dir: DVec3, tmin: f64, tmax: f64, keep: impl Fn(u32) -> bool) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        let mut tmax = tmax;
+        self.walk(origin, dir, tmin, &mut tmax, &keep, &mut |h| {
+            best = Some(h);
+            false
+        });
+        best
+    }
+
+    /// Whether anything (passing `keep`) is hit with `tmin < t < tmax`.
+    pub fn occluded(&self, origin: DVec3, dir: DVec3, tmin: f64, tmax: f64, keep: impl Fn(u32) -> bool) -> bool {
+        let mut any = false;
+        let mut tmax = tmax;
+        self.walk(origin, dir, tmin, &mut tmax, &keep, &mut |_| {
+            any = true;
+            true
+        });
+        any
+    }
+
+    /// Visits hits in no particular order, shrinking `tmax` to each hit; stops when `on_hit` returns true.
+    fn walk(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        tmin: f64,
+        tmax: &mut f64,
+        keep: &dyn Fn(u32) -> bool,
+        on_hit: &mut dyn FnMut(Hit) -> bool,
+    ) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let inv = DVec3::ONE / dir;
+        let mut stack = [0u32; 64];
+        let mut sp = 1usize;
+        while sp > 0 {
+            sp -= 1;
+            let n = &self.nodes[stack[sp] as usize];
+            if !slab(n.lo, n.hi, origin, inv, tmin, *tmax) {
+                continue;
+            }
+            if n.count > 0 {
+                for t in &self.tris[n.first as usize..(n.first + n.count) as usize] {
+                    if !keep(t.id) {
+                        continue;
+                    }
+                    if let Some(tt) = ray_triangle(origin, dir, t)
+                        && tt > tmin
+                        && tt < *tmax
+                    {
+                        *tmax = tt;
+                        if on_hit(Hit { t: tt, id: t.id }) {
+                            return;
+                        }
+                    }
+                }
+            } else if sp + 2 <= stack.len() {
+                stack[sp] = n.first;
+                stack[sp + 1] = n.first + 1;
+                sp += 2;
+            }
+        }
+    }
+}
+
+#[inline]
+fn centroid(t: &Triangle) -> DVec3 {
+    (t.p[0] + t.p[1] + t.p[2]) / 3.0
+}
+
+#[inline]
+fn slab(lo: DVec3, hi: DVec3, o: DVec3, inv: DVec3, tmin: f64, tmax: f64) -> bool {
+    let t0 = (lo - o) * inv;
+    let t1 = (hi - o) * inv;
+    // NaN (0 · inf) comparisons fall out as "no constraint" through min/max.
+    let tn = t0.min(t1).max_element().max(tmin);
+    let tf = t0.max(t1).min_element().min(tmax);
+    tn <= tf
+}
+
+/// Möller–Trumbore: the ray parameter of the hit, if the ray meets the triangle (either side).
+#[inline]
+pub fn ray_triangle(o: DVec3, d: DVec3, t: &Triangle) -> Option<f64> {
+    let e1 = t.p[1] - t.p[0];
+    let e2 = t.p[2] - t.p[0];
+    let pv = d.cross(e2);
+    let det = e1.dot(pv);
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let tv = o - t.p[0];
+    let u = tv.dot(pv) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let qv = tv.cross(e1);
+    let v = d.dot(qv) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    Some(e2.dot(qv) * inv)
+}
+
+/// Triangles covering a planar face with holes (constrained Delaunay in the
+/// face's plane; a fan of the outer contour when that fails), as indices into
+/// the contours' points numbered contour after contour.
+pub fn face_triangles(contours: &[Vec<DVec3>]) -> Vec<[usize; 3]> {
+    if contours.len() == 1 && contours[0].len() == 3 {
+        return vec![[0, 1, 2]];
+    }
+    if let Some(pr) = Projected::new(contours)
+        && let Some(t) = triangulate_polygon(&pr.contours)
+    {
+        return t;
+    }
+    let n = contours.first().map_or(0, Vec::len);
+    (1..n.saturating_sub(1)).map(|i| [0, i, i + 1]).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(n: usize) -> Vec<Triangle> {
+        // n×n unit squares in the plane z = k for k in 0..3, two triangles each.
+        let mut v = Vec::new();
+        for k in 0..3 {
+            for i in 0..n {
+                for j in 0..n {
+                    let p = |x: usize, y: usize| DVec3::new(x as f64, y as f64, k as f64);
+                    let id = (k * n * n + i * n + j) as u32;
+                    v.push(Triangle { p: [p(i, j), p(i + 1, j), p(i + 1, j + 1)], id });
+                    v.push(Triangle { p: [p(i, j), p(i + 1, j + 1), p(i, j + 1)], id });
+                }
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn nearest_hit_matches_brute_force() {
+        let tris = grid(10);
+        let bvh = Bvh::new(tris.clone());
+        let mut seed = 7u64;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..500 {
+            let o = DVec3::new(rnd() * 12.0 - 1.0, rnd() * 12.0 - 1.0, -1.0 + rnd() * 0.5);
+            let d = DVec3::new(rnd() - 0.5, rnd() - 0.5, 1.0).normalize();
+            let brute = tris
+                .iter()
+                .filter_map(|t| ray_triangle(o, d, t).filter(|&x| x > 1e-9).map(|x| (x, t.id)))
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            let got = bvh.intersect(o, d, 1e-9, f64::INFINITY, |_| true);
+            match (brute, got) {
+                (None, None) => {}
+                (Some((t, _)), Some(h)) => assert!((t - h.t).abs() < 1e-12),
+                other => panic!("mismatch {other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn occlusion_and_filtering() {
+        let bvh = Bvh::new(grid(4));
+        let o = DVec3::new(1.5, 1.5, -1.0);
+        let up = DVec3::Z;
+        assert!(bvh.occluded(o, up, 0.0, 10.0, |_| true));
+        assert!(!bvh.occluded(o, up, 0.0, 0.5, |_| true));
+        let h = bvh.intersect(o, up, 0.0, 10.0, |id| id >= 16).unwrap();
+        assert!((h.t - 2.0).abs() < 1e-12);
+        assert!(!bvh.occluded(o, -up, 0.0, 10.0, |_| true));
+    }
+
+    #[test]
+    fn face_with_hole_triangulates() {
+        let outer = vec![DVec3::new(0., 0., 1.), DVec3::new(3., 0., 1.), DVec3::new(3., 3., 1.), DVec3::new(0., 3., 1.)];
+        let hole = vec![DVec3::new(1., 1., 1.), DVec3::new(1., 2., 1.), DVec3::new(2., 2., 1.), DVec3::new(2., 1., 1.)];
+        let t = face_triangles(&[outer, hole]);
+        assert_eq!(t.len(), 8);
+    }
+}
