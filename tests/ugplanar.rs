@@ -52,13 +52,45 @@ fn warped_faces_are_tessellated_and_planar_ones_kept() {
             .filter(|f| f.starts_with("f window."))
             .all(|f| f.ends_with(" frame;"))
     );
-    // The wall is untouched; the tessellated surfaces keep their area to within
-    // the change that flattening a sagging corner implies (a few percent).
+    // Area per material is kept (ugcheck measures a non-planar face as the
+    // triangles ugplanar makes of it, and planar ones as polygons).
     assert_eq!(area(&after, "wall"), 12.0);
-    for m in ["roof", "frame"] {
+    for m in ["roof", "frame", "wall"] {
         let (a, b) = (area(&before, m), area(&after, m));
-        assert!((a - b).abs() / a < 0.05, "{m}: {a} → {b}");
+        assert!((a - b).abs() / a <= 1e-9, "{m}: {a} → {b}");
     }
+    // The window frame keeps its hole: the triangles' area is the frame's, not the rectangle's.
+    assert!(area(&after, "frame") < 4.0 * 3.2 - 1.9);
+}
+
+#[test]
+fn cornell_box_red_wall_is_split_and_nothing_else_changes() {
+    let path = fixture("cornell-box.ug");
+    let src = std::fs::read_to_string(&path).unwrap();
+    let before = check(&src);
+    let np = before["nonplanar"].as_array().unwrap();
+    assert_eq!(np.len(), 1);
+    assert_eq!(np[0]["face"], "red");
+    // 3.2 mm off the plane of three corners = 0.8 mm from the best-fit plane.
+    assert!((np[0]["deviation"].as_f64().unwrap() - 0.8).abs() < 1e-3);
+    let out = run_ok("ugplanar", &[path.to_str().unwrap()], None);
+    let after = check(&out);
+    assert_eq!(after["nonplanar"].as_array().unwrap().len(), 0);
+    assert_eq!(out.lines().filter(|l| l.starts_with("f red.")).count(), 2);
+    assert_eq!(out.lines().filter(|l| l.starts_with("f ")).count(), 17);
+    for m in ["white", "red", "green", "light"] {
+        let (a, b) = (area(&before, m), area(&after, m));
+        assert!((a - b).abs() / a <= 1e-9, "{m}: {a} → {b}");
+    }
+    // Everything but the red wall is written exactly as ugcat writes it.
+    let cat = run_ok("ugcat", &[path.to_str().unwrap()], None);
+    let strip = |s: &str| {
+        s.lines()
+            .filter(|l| !l.starts_with("f red"))
+            .map(String::from)
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(strip(&out), strip(&cat));
 }
 
 #[test]

@@ -403,7 +403,9 @@ pub fn check(m: &Model, eps: f64) -> Report {
     let mut nonplanar = Vec::new();
     let mut nonpatch = Vec::new();
     let mut geoms = Vec::with_capacity(per_face.len());
+    let mut is_nonplanar = Vec::with_capacity(per_face.len());
     for (d, n, p, g) in per_face {
+        is_nonplanar.push(n.is_some());
         degenerate.extend(d);
         nonplanar.extend(n);
         nonpatch.extend(p);
@@ -426,6 +428,7 @@ pub fn check(m: &Model, eps: f64) -> Report {
     }
 
     let tvertices = t_vertices(&cx, &mesh, &geoms);
+
     let (intersecting, overlapping, coincident) = pairs(&cx, &geoms);
 
     // Area per material, in material order, then faces without one.
@@ -437,7 +440,7 @@ pub fn check(m: &Model, eps: f64) -> Report {
             .map_or(m.materials.len(), |mm| mm.idx());
         used[slot] = true;
         if geoms[k].is_some() {
-            areas[slot] += geom::face_area(&cx.points(f)).abs();
+            areas[slot] += surface_area(&cx.points(f), is_nonplanar[k]);
         }
     }
     let area_by_material = (0..=m.materials.len())
@@ -707,6 +710,17 @@ fn pairs(cx: &Ctx<'_>, geoms: &[Option<FaceGeom>]) -> PairLists {
         out.2.extend(c);
     }
     out
+}
+
+/// The area of a face: for a planar face its polygon area (holes subtract,
+/// islands add); for a non-planar one the area of the triangles `ugplanar`
+/// would replace it with, so that tessellation keeps area per material exactly.
+pub fn surface_area(pts: &[Vec<DVec3>], nonplanar: bool) -> f64 {
+    if nonplanar && let Some(t) = geom::triangulate::fold_triangles(pts) {
+        let flat: Vec<DVec3> = pts.iter().flatten().copied().collect();
+        return geom::triangulate::triangles_area(&flat, &t);
+    }
+    geom::face_area(pts).abs()
 }
 
 fn perimeter(c: &[Vec<DVec2>]) -> f64 {

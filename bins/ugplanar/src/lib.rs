@@ -16,8 +16,8 @@
 //! give unnamed triangles). Planar faces and all other statements pass
 //! through unchanged.
 
-use geom::triangulate::triangulate_polygon;
-use geom::{DVec3, Frame, Plane, newell_normal};
+use geom::triangulate::fold_triangles;
+use geom::{DVec3, Plane, newell_normal};
 use rustc_hash::FxHashSet;
 use ug::{Face, FaceId, Item, Model, VertexId};
 
@@ -48,40 +48,16 @@ pub fn deviation(m: &Model, f: &Face) -> Option<(f64, Plane)> {
     Some((dev, plane))
 }
 
-/// Triangles for a non-planar face, as vertex triples in the face's orientation.
-pub fn tessellate(m: &Model, f: &Face, plane: &Plane) -> Option<Vec<[VertexId; 3]>> {
-    let p = |v: VertexId| m.pos(v);
-    if f.contours.len() == 1 && f.contours[0].len() == 4 {
-        let q = &f.contours[0];
-        let options = [
-            [[q[0], q[1], q[2]], [q[0], q[2], q[3]]],
-            [[q[0], q[1], q[3]], [q[1], q[2], q[3]]],
-        ];
-        let normal = |t: &[VertexId; 3]| (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0]));
-        let mut best: Option<(f64, usize)> = None;
-        for (k, tris) in options.iter().enumerate() {
-            let (n0, n1) = (normal(&tris[0]), normal(&tris[1]));
-            // Both triangles must face the face's side (else the diagonal is outside).
-            if n0.dot(plane.n) <= 0.0 || n1.dot(plane.n) <= 0.0 {
-                continue;
-            }
-            let fold = n0.normalize().dot(n1.normalize()).clamp(-1.0, 1.0).acos();
-            if best.is_none_or(|(b, _)| fold < b) {
-                best = Some((fold, k));
-            }
-        }
-        if let Some((_, k)) = best {
-            return Some(options[k].to_vec());
-        }
-    }
-    let frame = Frame::new(p(f.contours[0][0]), plane.n);
-    let c2: Vec<Vec<geom::DVec2>> = f
+/// Triangles for a non-planar face, as vertex triples in the face's orientation
+/// (see [`geom::triangulate::fold_triangles`]).
+pub fn tessellate(m: &Model, f: &Face) -> Option<Vec<[VertexId; 3]>> {
+    let pts: Vec<Vec<DVec3>> = f
         .contours
         .iter()
-        .map(|c| c.iter().map(|&v| frame.to_2d(p(v))).collect())
+        .map(|c| c.iter().map(|&v| m.pos(v)).collect())
         .collect();
     let ids: Vec<VertexId> = f.contours.iter().flatten().copied().collect();
-    let tris = triangulate_polygon(&c2)?;
+    let tris = fold_triangles(&pts)?;
     Some(
         tris.into_iter()
             .map(|t| [ids[t[0]], ids[t[1]], ids[t[2]]])
@@ -110,9 +86,9 @@ pub fn planarize(m: &Model, eps: f64) -> (Model, Stats) {
         let f = &m.faces[fid.idx()];
         stats.faces += 1;
         let tris = match deviation(m, f) {
-            Some((dev, plane)) if dev > eps => {
+            Some((dev, _)) if dev > eps => {
                 stats.nonplanar += 1;
-                let t = tessellate(m, f, &plane);
+                let t = tessellate(m, f);
                 if t.is_none() {
                     stats.failed.push(
                         f.name
@@ -217,7 +193,7 @@ mod tests {
             // Projected area onto the best-fit plane.
             area += tn.dot(n) / 2.0;
         }
-        let frame = Frame::new(DVec3::ZERO, n);
+        let frame = geom::Frame::new(DVec3::ZERO, n);
         let c2: Vec<Vec<geom::DVec2>> = m.faces[0]
             .contours
             .iter()

@@ -50,7 +50,12 @@ impl Bvh {
         if tris.is_empty() {
             return Bvh { nodes, tris };
         }
-        nodes.push(Node { lo: DVec3::ZERO, hi: DVec3::ZERO, first: 0, count: 0 });
+        nodes.push(Node {
+            lo: DVec3::ZERO,
+            hi: DVec3::ZERO,
+            first: 0,
+            count: 0,
+        });
         // (node index, start, end)
         let mut stack = vec![(0usize, 0usize, tris.len())];
         while let Some((ni, s, e)) = stack.pop() {
@@ -81,10 +86,22 @@ impl Bvh {
                 2
             };
             let mid = (s + e) / 2;
-            tris[s..e].select_nth_unstable_by(mid - s, |a, b| centroid(a)[axis].total_cmp(&centroid(b)[axis]));
+            tris[s..e].select_nth_unstable_by(mid - s, |a, b| {
+                centroid(a)[axis].total_cmp(&centroid(b)[axis])
+            });
             let left = nodes.len();
-            nodes.push(Node { lo, hi, first: 0, count: 0 });
-            nodes.push(Node { lo, hi, first: 0, count: 0 });
+            nodes.push(Node {
+                lo,
+                hi,
+                first: 0,
+                count: 0,
+            });
+            nodes.push(Node {
+                lo,
+                hi,
+                first: 0,
+                count: 0,
+            });
             nodes[ni].first = left as u32;
             nodes[ni].count = 0;
             stack.push((left, s, mid));
@@ -102,7 +119,14 @@ impl Bvh {
     }
 
     /// The nearest hit with `tmin < t < tmax` among triangles whose id passes `keep`.
-    pub fn intersect(&self, origin: DVec3, dir: DVec3, tmin: f64, tmax: f64, keep: impl Fn(u32) -> bool) -> Option<Hit> {
+    pub fn intersect(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        tmin: f64,
+        tmax: f64,
+        keep: impl Fn(u32) -> bool,
+    ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         let mut tmax = tmax;
         self.walk(origin, dir, tmin, &mut tmax, &keep, &mut |h| {
@@ -113,7 +137,14 @@ impl Bvh {
     }
 
     /// Whether anything (passing `keep`) is hit with `tmin < t < tmax`.
-    pub fn occluded(&self, origin: DVec3, dir: DVec3, tmin: f64, tmax: f64, keep: impl Fn(u32) -> bool) -> bool {
+    pub fn occluded(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        tmin: f64,
+        tmax: f64,
+        keep: impl Fn(u32) -> bool,
+    ) -> bool {
         let mut any = false;
         let mut tmax = tmax;
         self.walk(origin, dir, tmin, &mut tmax, &keep, &mut |_| {
@@ -236,8 +267,14 @@ mod tests {
                 for j in 0..n {
                     let p = |x: usize, y: usize| DVec3::new(x as f64, y as f64, k as f64);
                     let id = (k * n * n + i * n + j) as u32;
-                    v.push(Triangle { p: [p(i, j), p(i + 1, j), p(i + 1, j + 1)], id });
-                    v.push(Triangle { p: [p(i, j), p(i + 1, j + 1), p(i, j + 1)], id });
+                    v.push(Triangle {
+                        p: [p(i, j), p(i + 1, j), p(i + 1, j + 1)],
+                        id,
+                    });
+                    v.push(Triangle {
+                        p: [p(i, j), p(i + 1, j + 1), p(i, j + 1)],
+                        id,
+                    });
                 }
             }
         }
@@ -250,7 +287,9 @@ mod tests {
         let bvh = Bvh::new(tris.clone());
         let mut seed = 7u64;
         let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64
         };
         for _ in 0..500 {
@@ -258,7 +297,11 @@ mod tests {
             let d = DVec3::new(rnd() - 0.5, rnd() - 0.5, 1.0).normalize();
             let brute = tris
                 .iter()
-                .filter_map(|t| ray_triangle(o, d, t).filter(|&x| x > 1e-9).map(|x| (x, t.id)))
+                .filter_map(|t| {
+                    ray_triangle(o, d, t)
+                        .filter(|&x| x > 1e-9)
+                        .map(|x| (x, t.id))
+                })
                 .min_by(|a, b| a.0.total_cmp(&b.0));
             let got = bvh.intersect(o, d, 1e-9, f64::INFINITY, |_| true);
             match (brute, got) {
@@ -283,8 +326,18 @@ mod tests {
 
     #[test]
     fn face_with_hole_triangulates() {
-        let outer = vec![DVec3::new(0., 0., 1.), DVec3::new(3., 0., 1.), DVec3::new(3., 3., 1.), DVec3::new(0., 3., 1.)];
-        let hole = vec![DVec3::new(1., 1., 1.), DVec3::new(1., 2., 1.), DVec3::new(2., 2., 1.), DVec3::new(2., 1., 1.)];
+        let outer = vec![
+            DVec3::new(0., 0., 1.),
+            DVec3::new(3., 0., 1.),
+            DVec3::new(3., 3., 1.),
+            DVec3::new(0., 3., 1.),
+        ];
+        let hole = vec![
+            DVec3::new(1., 1., 1.),
+            DVec3::new(1., 2., 1.),
+            DVec3::new(2., 2., 1.),
+            DVec3::new(2., 1., 1.),
+        ];
         let t = face_triangles(&[outer, hole]);
         assert_eq!(t.len(), 8);
     }

@@ -34,7 +34,7 @@ impl Plane {
     pub fn fit(pts: &[DVec3]) -> Option<Plane> {
         let n = newell_normal(pts);
         let len = n.length();
-        if !(len > 0.0) || pts.is_empty() {
+        if len.is_nan() || len <= 0.0 || pts.is_empty() {
             return None;
         }
         let n = n / len;
