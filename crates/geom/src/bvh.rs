@@ -154,13 +154,48 @@ impl Bvh {
         any
     }
 
-    /// Visits hits in no particular order, shrinking `tmax` to each hit; stops when `on_hit` returns true.
+    /// Every hit with `tmin < t < tmax` (passing `keep`), in no particular order
+    /// (for parity tests: a point is inside a closed surface when a ray from it
+    /// crosses the surface an odd number of times).
+    pub fn all_hits(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        tmin: f64,
+        tmax: f64,
+        keep: impl Fn(u32) -> bool,
+    ) -> Vec<Hit> {
+        let mut hits = Vec::new();
+        let mut tmax = tmax;
+        self.walk_with(origin, dir, tmin, &mut tmax, false, &keep, &mut |h| {
+            hits.push(h);
+            false
+        });
+        hits
+    }
+
     fn walk(
         &self,
         origin: DVec3,
         dir: DVec3,
         tmin: f64,
         tmax: &mut f64,
+        keep: &dyn Fn(u32) -> bool,
+        on_hit: &mut dyn FnMut(Hit) -> bool,
+    ) {
+        self.walk_with(origin, dir, tmin, tmax, true, keep, on_hit)
+    }
+
+    /// Visits hits in no particular order (shrinking `tmax` to each hit when
+    /// `shrink`); stops when `on_hit` returns true.
+    #[allow(clippy::too_many_arguments)]
+    fn walk_with(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        tmin: f64,
+        tmax: &mut f64,
+        shrink: bool,
         keep: &dyn Fn(u32) -> bool,
         on_hit: &mut dyn FnMut(Hit) -> bool,
     ) {
@@ -185,7 +220,9 @@ impl Bvh {
                         && tt > tmin
                         && tt < *tmax
                     {
-                        *tmax = tt;
+                        if shrink {
+                            *tmax = tt;
+                        }
                         if on_hit(Hit { t: tt, id: t.id }) {
                             return;
                         }
@@ -322,6 +359,10 @@ mod tests {
         let h = bvh.intersect(o, up, 0.0, 10.0, |id| id >= 16).unwrap();
         assert!((h.t - 2.0).abs() < 1e-12);
         assert!(!bvh.occluded(o, -up, 0.0, 10.0, |_| true));
+        // Three planes above: three crossings (each square is two triangles; one is hit
+        // when the ray misses their common diagonal).
+        let o2 = DVec3::new(1.3, 1.6, -1.0);
+        assert_eq!(bvh.all_hits(o2, up, 0.0, 10.0, |_| true).len(), 3);
     }
 
     #[test]

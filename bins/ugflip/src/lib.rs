@@ -1,0 +1,536 @@
+//! Face orientation (Smith 1991, §2.3), made automatic and scriptable.
+//!
+//! **Automatic mode** (the default):
+//! 1. Within each connected component (faces joined by manifold edges —
+//!    edges with exactly two uses), orientation is made consistent by a
+//!    breadth-first walk from the component's first face; the component's
+//!    reference orientation is that of the majority of its faces, so the
+//!    fewest faces are flipped for consistency.
+//! 2. Each component then gets its outside:
+//!    * a **closed** component (every edge has exactly two uses within it)
+//!      with volume faces outward (positive signed volume) like a solid object,
+//!      unless it encloses other geometry — a point of another component
+//!      (furniture, a light), a camera eye or a light bomb lies inside it (ray
+//!      parity) — in which case it is a room or a shell and faces inward;
+//!    * an **open** component (a box missing a side, a lone wall, a floor)
+//!      faces the side from which more of the rest of the scene is seen:
+//!      rays are cast from both sides of every face (a fixed, deterministic
+//!      cosine-weighted set); a hit at distance t counts t² (the surface a
+//!      ray's solid angle covers there), weighted by face area. Surface of
+//!      other components decides first; the component's own faces break
+//!      ties (a box missing a side faces inward). When the two sides differ
+//!      by less than 5% the component is *ambiguous*: it is left as it is (or
+//!      made double-sided with `double_sided_ambiguous`) and reported.
+//!
+//! **Explicit operations** run after the automatic step when asked for:
+//! light bombs (every face visible from the point whose front faces away from
+//! it is flipped; bombs apply in order), `--flip NAME`, `--double-sided NAME`
+//! (adds the reversed twin `NAME.back` right after the face).
+
+use geom::bvh::{Bvh, Triangle, face_triangles};
+use geom::{DVec3, Frame};
+use rayon::prelude::*;
+use ug::{Face, FaceId, Model};
+use winged::Mesh;
+
+/// What to do.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Run automatic orientation.
+    pub auto: bool,
+    pub bombs: Vec<DVec3>,
+    pub flip: Vec<String>,
+    pub double_sided: Vec<String>,
+    pub double_sided_ambiguous: bool,
+    /// Rays per face side for the visibility vote.
+    pub rays: usize,
+    /// Distance tolerance (ray offsets, flatness of closed components).
+    pub eps: f64,
+    /// Extra points known to be inside rooms (camera eyes).
+    pub viewpoints: Vec<DVec3>,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            auto: true,
+            bombs: vec![],
+            flip: vec![],
+            double_sided: vec![],
+            double_sided_ambiguous: false,
+            rays: 32,
+            eps: 1e-9,
+            viewpoints: vec![],
+        }
+    }
+}
+
+/// How many faces were flipped, and why.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Report {
+    pub components: usize,
+    /// Flipped to agree with their component's neighbours.
+    pub consistency: usize,
+    /// Flipped so a closed solid faces outward.
+    pub outward: usize,
+    /// Flipped so a closed room or shell faces what it encloses.
+    pub inward: usize,
+    /// Flipped so an open component faces the side that sees more of the scene.
+    pub toward_scene: usize,
+    pub by_bombs: usize,
+    pub by_name: usize,
+    pub doubled: usize,
+    /// Components whose outside could not be decided (named by their first face).
+    pub ambiguous: Vec<String>,
+    /// Components that cannot be oriented consistently (Möbius-like), by first face.
+    pub nonorientable: Vec<String>,
+}
+
+impl Report {
+    pub fn flipped(&self) -> usize {
+        self.consistency
+            + self.outward
+            + self.inward
+            + self.toward_scene
+            + self.by_bombs
+            + self.by_name
+    }
+}
+
+/// A named face that does not exist.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UnknownFace(pub String);
+
+/// Face label: name or `#k` (k-th live face from 1).
+fn labels(mesh: &Mesh) -> Vec<(FaceId, String)> {
+    mesh.faces()
+        .enumerate()
+        .map(|(k, f)| {
+            (
+                f,
+                mesh.face(f)
+                    .name
+                    .clone()
+                    .unwrap_or_else(|| format!("#{}", k + 1)),
+            )
+        })
+        .collect()
+}
+
+/// A point well inside a face (centroid of its largest triangle), its unit normal and area.
+struct Sample {
+    p: DVec3,
+    n: DVec3,
+    area: f64,
+}
+
+fn sample(mesh: &Mesh, f: FaceId) -> Option<Sample> {
+    let pts = mesh.face_points(f);
+    let n = mesh.face_normal(f)?;
+    let flat: Vec<DVec3> = pts.iter().flatten().copied().collect();
+    let tris = face_triangles(&pts);
+    let best = tris
+        .iter()
+        .max_by(|a, b| tri_area(&flat, a).total_cmp(&tri_area(&flat, b)))?;
+    let p = (flat[best[0]] + flat[best[1]] + flat[best[2]]) / 3.0;
+    Some(Sample {
+        p,
+        n,
+        area: mesh.face_area(f).abs(),
+    })
+}
+
+fn tri_area(p: &[DVec3], t: &[usize; 3]) -> f64 {
+    (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]).length() / 2.0
+}
+
+/// Triangles of every live face, tagged with the face id.
+fn scene(mesh: &Mesh) -> Bvh {
+    let mut tris = Vec::new();
+    for f in mesh.faces() {
+        let pts = mesh.face_points(f);
+        let flat: Vec<DVec3> = pts.iter().flatten().copied().collect();
+        for t in face_triangles(&pts) {
+            tris.push(Triangle {
+                p: [flat[t[0]], flat[t[1]], flat[t[2]]],
+                id: f.0,
+            });
+        }
+    }
+    Bvh::new(tris)
+}
+
+/// Deterministic cosine-weighted directions around +z (Hammersley points).
+fn hemisphere(k: usize) -> Vec<DVec3> {
+    (0..k)
+        .map(|i| {
+            let u = (i as f64 + 0.5) / k as f64;
+            let v = (i as u32).reverse_bits() as f64 / 4294967296.0;
+            let r = u.sqrt();
+            let phi = 2.0 * std::f64::consts::PI * v;
+            DVec3::new(r * phi.cos(), r * phi.sin(), (1.0 - u).max(0.0).sqrt())
+        })
+        .collect()
+}
+
+/// Orients the faces of a flat model.
+pub fn orient(model: Model, opts: &Options) -> Result<(Model, Report), UnknownFace> {
+    let mut mesh = Mesh::from_model(model);
+    let mut rep = Report::default();
+    let names = labels(&mesh);
+    let find = |n: &str| names.iter().find(|(_, l)| l == n).map(|(f, _)| *f);
+    let flips: Vec<FaceId> = opts
+        .flip
+        .iter()
+        .map(|n| find(n).ok_or_else(|| UnknownFace(n.clone())))
+        .collect::<Result<_, _>>()?;
+    let doubles: Vec<FaceId> = opts
+        .double_sided
+        .iter()
+        .map(|n| find(n).ok_or_else(|| UnknownFace(n.clone())))
+        .collect::<Result<_, _>>()?;
+
+    let mut ambiguous_faces: Vec<FaceId> = Vec::new();
+    if opts.auto {
+        ambiguous_faces = automatic(&mut mesh, opts, &names, &mut rep);
+    }
+    if !opts.bombs.is_empty() {
+        let bvh = scene(&mesh);
+        let faces: Vec<FaceId> = mesh.faces().collect();
+        let samples: Vec<Option<Sample>> = faces.iter().map(|&f| sample(&mesh, f)).collect();
+        let mut flipped = vec![false; faces.len()];
+        for &b in &opts.bombs {
+            let visible: Vec<bool> = faces
+                .par_iter()
+                .zip(&samples)
+                .map(|(&f, s)| {
+                    let Some(s) = s else { return false };
+                    let d = s.p - b;
+                    d.length() > opts.eps && !bvh.occluded(b, d, 0.0, 1.0 - 1e-9, |id| id != f.0)
+                })
+                .collect();
+            for (k, &f) in faces.iter().enumerate() {
+                let Some(s) = &samples[k] else { continue };
+                let front = s.n * if flipped[k] { -1.0 } else { 1.0 };
+                if visible[k] && front.dot(b - s.p) < 0.0 {
+                    mesh.flip_face(f);
+                    flipped[k] = !flipped[k];
+                    rep.by_bombs += 1;
+                }
+            }
+        }
+    }
+    for f in flips {
+        mesh.flip_face(f);
+        rep.by_name += 1;
+    }
+    let mut twins: Vec<FaceId> = doubles;
+    if opts.double_sided_ambiguous {
+        twins.extend(ambiguous_faces);
+    }
+    twins.sort_unstable();
+    twins.dedup();
+    for f in twins {
+        let face = mesh.face(f).clone();
+        let mut contours = face.contours.clone();
+        for c in &mut contours {
+            c[1..].reverse();
+        }
+        let name = face.name.as_ref().map(|n| format!("{n}.back"));
+        mesh.add_face(
+            Some(f),
+            Face {
+                name,
+                contours,
+                material: face.material,
+            },
+        );
+        rep.doubled += 1;
+    }
+    Ok((mesh.into_model(), rep))
+}
+
+/// Automatic orientation; returns the faces of ambiguous components.
+fn automatic(
+    mesh: &mut Mesh,
+    opts: &Options,
+    names: &[(FaceId, String)],
+    rep: &mut Report,
+) -> Vec<FaceId> {
+    let faces: Vec<FaceId> = mesh.faces().collect();
+    let nf = mesh.model().faces.len();
+    let label = |f: FaceId| {
+        names
+            .iter()
+            .find(|(g, _)| *g == f)
+            .map(|(_, l)| l.clone())
+            .unwrap_or_default()
+    };
+    // 1. Components over manifold edges, with relative flips.
+    let mut comp = vec![usize::MAX; nf];
+    let mut rel = vec![false; nf];
+    let mut comps: Vec<Vec<FaceId>> = Vec::new();
+    for &start in &faces {
+        if comp[start.idx()] != usize::MAX {
+            continue;
+        }
+        let c = comps.len();
+        let mut members = vec![start];
+        comp[start.idx()] = c;
+        let mut conflict = false;
+        let mut k = 0;
+        while k < members.len() {
+            let f = members[k];
+            k += 1;
+            for e in mesh.face_edges(f) {
+                let ed = mesh.edge(e);
+                if ed.uses.len() != 2 || ed.uses[0].face == ed.uses[1].face {
+                    continue;
+                }
+                let (mine, other) = if ed.uses[0].face == f {
+                    (ed.uses[0], ed.uses[1])
+                } else {
+                    (ed.uses[1], ed.uses[0])
+                };
+                let g = other.face;
+                // Consistent neighbours walk the shared edge in opposite directions.
+                let want = rel[f.idx()] ^ (mine.forward == other.forward);
+                if comp[g.idx()] == usize::MAX {
+                    comp[g.idx()] = c;
+                    rel[g.idx()] = want;
+                    members.push(g);
+                } else if rel[g.idx()] != want {
+                    conflict = true;
+                }
+            }
+        }
+        if conflict {
+            rep.nonorientable.push(label(start));
+        }
+        // Majority reference: flip the fewest.
+        let nflip = members.iter().filter(|f| rel[f.idx()]).count();
+        if 2 * nflip > members.len() {
+            for f in &members {
+                rel[f.idx()] = !rel[f.idx()];
+            }
+        }
+        comps.push(members);
+    }
+    rep.components = comps.len();
+
+    // Geometry with the relative flips applied.
+    let samples: Vec<Option<Sample>> = (0..nf)
+        .map(|i| {
+            let f = FaceId(i as u32);
+            if !mesh.is_face_live(f) {
+                return None;
+            }
+            sample(mesh, f).map(|mut s| {
+                if rel[i] {
+                    s.n = -s.n;
+                }
+                s
+            })
+        })
+        .collect();
+    let bvh = scene(mesh);
+
+    // 2. Decide each component's side: +1 keep, -1 flip, 0 ambiguous.
+    let decisions: Vec<(i32, Reason)> = comps
+        .par_iter()
+        .enumerate()
+        .map(|(c, members)| decide(mesh, &bvh, &comp, &rel, &samples, c, members, &comps, opts))
+        .collect();
+
+    let mut ambiguous = Vec::new();
+    for (c, members) in comps.iter().enumerate() {
+        let (d, reason) = decisions[c];
+        if d == 0 {
+            rep.ambiguous.push(label(members[0]));
+            ambiguous.extend(members.iter().copied());
+        }
+        for &f in members {
+            let flip_all = d < 0;
+            let flip = rel[f.idx()] ^ flip_all;
+            if !flip {
+                continue;
+            }
+            mesh.flip_face(f);
+            if !flip_all {
+                rep.consistency += 1;
+            } else {
+                match reason {
+                    Reason::Outward => rep.outward += 1,
+                    Reason::Inward => rep.inward += 1,
+                    Reason::Scene | Reason::None => rep.toward_scene += 1,
+                }
+            }
+        }
+    }
+    ambiguous
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Reason {
+    None,
+    Outward,
+    Inward,
+    Scene,
+}
+
+#[allow(clippy::too_many_arguments)]
+fn decide(
+    mesh: &Mesh,
+    bvh: &Bvh,
+    comp: &[usize],
+    rel: &[bool],
+    samples: &[Option<Sample>],
+    c: usize,
+    members: &[FaceId],
+    comps: &[Vec<FaceId>],
+    opts: &Options,
+) -> (i32, Reason) {
+    let total_area: f64 = members
+        .iter()
+        .filter_map(|f| samples[f.idx()].as_ref())
+        .map(|s| s.area)
+        .sum();
+    if total_area <= 0.0 {
+        return (1, Reason::None);
+    }
+    // Closed: every edge of every member has exactly two uses, both in this component.
+    let closed = members.iter().all(|&f| {
+        mesh.face_edges(f).iter().all(|&e| {
+            let u = &mesh.edge(e).uses;
+            u.len() == 2 && u.iter().all(|x| comp[x.face.idx()] == c)
+        })
+    });
+    if closed {
+        let mut vol = 0.0;
+        for &f in members {
+            let pts = mesh.face_points(f);
+            let flat: Vec<DVec3> = pts.iter().flatten().copied().collect();
+            for t in face_triangles(&pts) {
+                let v = flat[t[0]].dot(flat[t[1]].cross(flat[t[2]])) / 6.0;
+                vol += if rel[f.idx()] { -v } else { v };
+            }
+        }
+        let (lo, hi) = bbox_of(mesh, members);
+        let size = (hi - lo).length();
+        if vol.abs() > opts.eps * total_area.max(size * size) {
+            let encloses = encloses(bvh, comp, samples, c, comps, opts, lo, hi);
+            let outward = vol > 0.0;
+            return if encloses {
+                (if outward { -1 } else { 1 }, Reason::Inward)
+            } else {
+                (if outward { 1 } else { -1 }, Reason::Outward)
+            };
+        }
+        // Flat closed surfaces (two sides of a zero-thickness wall): nothing to decide.
+        return (1, Reason::None);
+    }
+    // Open: visibility vote. Each ray that hits scene at distance t sees about
+    // t² of surface (per unit solid angle), so the sums estimate how much of the
+    // scene each side sees; a face close under a ceiling sees little behind it.
+    let dirs = hemisphere(opts.rays.max(1));
+    // [front, back] for other components and for the component's own faces.
+    let (mut other, mut own) = ([0.0f64; 2], [0.0f64; 2]);
+    for &f in members {
+        let Some(s) = &samples[f.idx()] else { continue };
+        let frame = Frame::new(s.p, s.n);
+        let delta = opts.eps.max(1e-9 * (1.0 + s.p.length()));
+        let w = s.area / dirs.len() as f64;
+        for (k, side) in [1.0, -1.0].into_iter().enumerate() {
+            let o = s.p + s.n * (side * delta);
+            for d in &dirs {
+                let dir = (frame.u * d.x + frame.v * d.y + frame.n * d.z) * side;
+                if let Some(h) = bvh.intersect(o, dir, 0.0, f64::INFINITY, |id| id != f.0) {
+                    let seen = h.t * h.t * w;
+                    if comp[h.id as usize] == c {
+                        own[k] += seen;
+                    } else {
+                        other[k] += seen;
+                    }
+                }
+            }
+        }
+    }
+    let verdict = |s: [f64; 2]| {
+        let (sum, diff) = (s[0] + s[1], s[0] - s[1]);
+        (sum > 0.0 && diff.abs() > 0.05 * sum).then_some(if diff > 0.0 { 1 } else { -1 })
+    };
+    match verdict(other).or_else(|| verdict(own)) {
+        Some(d) => (d, Reason::Scene),
+        None => (0, Reason::None),
+    }
+}
+
+fn bbox_of(mesh: &Mesh, members: &[FaceId]) -> (DVec3, DVec3) {
+    geom::index::bbox(
+        members
+            .iter()
+            .flat_map(|&f| mesh.face_points(f).into_iter().flatten()),
+        0.0,
+    )
+}
+
+/// Whether a closed component contains a point of another component (lights
+/// included), a camera eye or a light bomb (ray parity against its own faces).
+#[allow(clippy::too_many_arguments)]
+fn encloses(
+    bvh: &Bvh,
+    comp: &[usize],
+    samples: &[Option<Sample>],
+    c: usize,
+    comps: &[Vec<FaceId>],
+    opts: &Options,
+    lo: DVec3,
+    hi: DVec3,
+) -> bool {
+    let mut probes: Vec<DVec3> = Vec::new();
+    for (k, members) in comps.iter().enumerate() {
+        if k == c {
+            continue;
+        }
+        if let Some(s) = members.iter().find_map(|f| samples[f.idx()].as_ref()) {
+            probes.push(s.p);
+        }
+    }
+    probes.extend(opts.viewpoints.iter().copied());
+    probes.extend(opts.bombs.iter().copied());
+    let dir = DVec3::new(0.318_309_886, 0.718_281_828, 0.618_033_988).normalize();
+    probes
+        .into_iter()
+        .filter(|p| p.cmpge(lo).all() && p.cmple(hi).all())
+        .any(|p| {
+            let mut ts: Vec<f64> = bvh
+                .all_hits(p, dir, 0.0, f64::INFINITY, |id| comp[id as usize] == c)
+                .into_iter()
+                .map(|h| h.t)
+                .collect();
+            ts.sort_by(f64::total_cmp);
+            ts.dedup_by(|a, b| (*a - *b).abs() <= 1e-9 * (1.0 + b.abs()));
+            ts.len() % 2 == 1
+        })
+}
+
+/// Eye points of `cam` statements written `cam NAME … -eye X Y Z …`.
+pub fn camera_eyes(m: &Model) -> Vec<DVec3> {
+    m.items
+        .iter()
+        .filter_map(|it| match it {
+            ug::Item::Camera(r) => {
+                let w: Vec<&str> = r.text.split_whitespace().collect();
+                let k = w.iter().position(|x| *x == "-eye")?;
+                let n: Vec<f64> = w
+                    .get(k + 1..k + 4)?
+                    .iter()
+                    .filter_map(|x| x.parse().ok())
+                    .collect();
+                (n.len() == 3 && n.iter().all(|v| v.is_finite()))
+                    .then(|| DVec3::new(n[0], n[1], n[2]))
+            }
+            _ => None,
+        })
+        .collect()
+}

@@ -1,0 +1,199 @@
+//! ugflip end to end. Fixture faces carry their expected front direction in
+//! their name (`_px` = +x, `_nz` = -z, …); the tests compute each output
+//! face's Newell normal and compare.
+
+use ugkit::{fixture, run, run_ok};
+
+fn normals(ug_text: &str) -> Vec<(String, [f64; 3])> {
+    let m = ug::parse(ug_text.as_bytes(), "out").unwrap().model;
+    m.top_faces()
+        .map(|f| {
+            let face = m.face(f);
+            let p: Vec<[f64; 3]> = face.contours[0]
+                .iter()
+                .map(|&v| m.pos(v).to_array())
+                .collect();
+            let mut n = [0.0; 3];
+            for i in 0..p.len() {
+                let (a, b) = (p[i], p[(i + 1) % p.len()]);
+                n[0] += (a[1] - b[1]) * (a[2] + b[2]);
+                n[1] += (a[2] - b[2]) * (a[0] + b[0]);
+                n[2] += (a[0] - b[0]) * (a[1] + b[1]);
+            }
+            (face.name.clone().unwrap_or_default(), n)
+        })
+        .collect()
+}
+
+fn expected(name: &str) -> Option<[f64; 3]> {
+    let suffix = name.rsplit('_').next()?;
+    let v = match suffix.trim_end_matches(".back") {
+        "px" => [1., 0., 0.],
+        "nx" => [-1., 0., 0.],
+        "py" => [0., 1., 0.],
+        "ny" => [0., -1., 0.],
+        "pz" => [0., 0., 1.],
+        "nz" => [0., 0., -1.],
+        _ => return None,
+    };
+    Some(if name.ends_with(".back") {
+        v.map(|x| -x)
+    } else {
+        v
+    })
+}
+
+fn assert_faces_point_as_named(text: &str, what: &str) {
+    let ns = normals(text);
+    assert!(!ns.is_empty());
+    for (name, n) in ns {
+        let e = expected(&name)
+            .unwrap_or_else(|| panic!("{what}: face {name} has no direction suffix"));
+        let dot = n[0] * e[0] + n[1] * e[1] + n[2] * e[2];
+        assert!(dot > 0.0, "{what}: face {name} faces {n:?}, expected {e:?}");
+    }
+}
+
+#[test]
+fn automatic_mode_orients_as_a_person_would() {
+    for name in [
+        "floating-box",
+        "room",
+        "furnished-room",
+        "open-box",
+        "wall-window",
+    ] {
+        let path = fixture(&format!("flip/{name}.ug"));
+        let src = std::fs::read_to_string(&path).unwrap();
+        // The fixtures really are scrambled.
+        let scrambled =
+            std::panic::catch_unwind(|| assert_faces_point_as_named(&src, name)).is_err();
+        assert!(scrambled, "{name}: fixture is already oriented");
+        let out = run("ugflip", &[path.to_str().unwrap()], None);
+        assert!(out.status.success());
+        let text = String::from_utf8(out.stdout).unwrap();
+        if name == "wall-window" {
+            // Ambiguous: consistent, reported, left in the majority orientation.
+            let err = String::from_utf8(out.stderr).unwrap();
+            assert!(err.contains("face w1_ny is ambiguous"), "{err}");
+        }
+        assert_faces_point_as_named(&text, name);
+        // Consistent and otherwise unchanged according to ugcheck.
+        let r: serde_json::Value =
+            serde_json::from_str(&run_ok("ugcheck", &["--json"], Some(text.as_bytes()))).unwrap();
+        assert_eq!(r["inconsistent"].as_array().unwrap().len(), 0, "{name}");
+        let before: serde_json::Value = serde_json::from_str(&run_ok(
+            "ugcheck",
+            &["--json", path.to_str().unwrap()],
+            None,
+        ))
+        .unwrap();
+        assert_eq!(r["area_by_material"], before["area_by_material"], "{name}");
+        assert_eq!(r["counts"], before["counts"], "{name}");
+    }
+}
+
+#[test]
+fn ambiguous_parts_can_be_made_double_sided() {
+    let path = fixture("flip/wall-window.ug");
+    let out = run_ok(
+        "ugflip",
+        &["-q", "--double-sided-ambiguous", path.to_str().unwrap()],
+        None,
+    );
+    let ns = normals(&out);
+    assert_eq!(ns.len(), 16);
+    assert_eq!(ns.iter().filter(|(n, _)| n.ends_with(".back")).count(), 8);
+    // Each twin follows its face.
+    let names: Vec<&str> = ns.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(&names[..2], ["w1_ny", "w1_ny.back"]);
+    assert_faces_point_as_named(&out, "double-sided");
+}
+
+#[test]
+fn light_bomb_turns_every_visible_face_toward_it() {
+    // The room with every face pointing outward: a bomb inside turns them all in.
+    let path = fixture("flip/room.ug");
+    let out = run_ok(
+        "ugflip",
+        &["--no-auto", "--bomb", "2.5,2,1.5", path.to_str().unwrap()],
+        None,
+    );
+    for (name, n) in normals(&out) {
+        // Every face now faces the bomb.
+        let m = ug::parse(out.as_bytes(), "o").unwrap().model;
+        let f = m
+            .top_faces()
+            .find(|&f| m.face(f).name.as_deref() == Some(&name))
+            .unwrap();
+        let c = m.face(f).contours[0]
+            .iter()
+            .map(|&v| m.pos(v))
+            .sum::<glam::DVec3>()
+            / 4.0;
+        let to_bomb = glam::DVec3::new(2.5, 2.0, 1.5) - c;
+        assert!(to_bomb.dot(glam::DVec3::from_array(n)) > 0.0, "{name}");
+    }
+    // A bomb outside the room, beyond its +x, +y, +z corner, sees exactly the
+    // outer sides of the right, back and top walls: those now face it, and no
+    // other face changes.
+    let out2 = run_ok(
+        "ugflip",
+        &["--no-auto", "--bomb", "50,50,50", path.to_str().unwrap()],
+        None,
+    );
+    let before = normals(&run_ok("ugcat", &[path.to_str().unwrap()], None));
+    let after = normals(&out2);
+    for ((name, nb), (name2, na)) in before.iter().zip(&after) {
+        assert_eq!(name, name2);
+        let axis = match name.as_str() {
+            "rright_nx" => Some(0),
+            "rback_ny" => Some(1),
+            "rtop_nz" => Some(2),
+            _ => None,
+        };
+        match axis {
+            Some(k) => assert!(na[k] > 0.0, "{name} should face the bomb: {na:?}"),
+            None => assert_eq!(nb, na, "{name} is not visible from the bomb"),
+        }
+    }
+}
+
+#[test]
+fn flip_by_name_flips_exactly_that_face() {
+    let path = fixture("flip/floating-box.ug");
+    let p = path.to_str().unwrap();
+    let before = run_ok("ugcat", &[p], None);
+    let after = run_ok("ugflip", &["--no-auto", "--flip", "top_pz", p], None);
+    let diff: Vec<(&str, &str)> = before
+        .lines()
+        .zip(after.lines())
+        .filter(|(a, b)| a != b)
+        .collect();
+    assert_eq!(diff.len(), 1, "{diff:?}");
+    assert!(diff[0].0.starts_with("f top_pz"));
+    let nb = normals(&before);
+    let na = normals(&after);
+    let top = |v: &[(String, [f64; 3])]| v.iter().find(|(n, _)| n == "top_pz").unwrap().1[2];
+    assert_eq!(top(&nb), -top(&na));
+    // Unknown names are a usage error, nothing written.
+    let bad = run("ugflip", &["--flip", "nosuch", p], None);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(bad.stdout.is_empty());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("no face named 'nosuch'"));
+}
+
+#[test]
+fn deterministic_at_any_thread_count() {
+    let path = fixture("flip/furnished-room.ug");
+    let p = path.to_str().unwrap();
+    let one = {
+        let mut cmd = std::process::Command::new(ugkit::bin("ugflip"));
+        cmd.arg(p).env("RAYON_NUM_THREADS", "1");
+        cmd.output().unwrap().stdout
+    };
+    let many = run_ok("ugflip", &[p], None);
+    assert_eq!(String::from_utf8(one).unwrap(), many);
+    // Idempotent: an oriented model stays as it is.
+    assert_eq!(run_ok("ugflip", &[], Some(many.as_bytes())), many);
+}
