@@ -1,0 +1,710 @@
+//! The patch mesher (Smith 1991, §3.1): every surface becomes triangles and
+//! convex quadrilaterals of about a given edge length, without T-vertices.
+//!
+//! For each face (a surface: run `ugvlmerge` first so that coplanar faces of
+//! one material are joined; otherwise each face is meshed on its own, still
+//! without T-vertices):
+//!
+//! 1. every boundary edge is divided into the whole number of equal segments
+//!    nearest to `len` (7.6 with len 2 → 4 segments of 1.9). The division
+//!    depends only on the edge, so an edge shared by several faces is divided
+//!    identically in all of them (computed once, from its lower vertex id);
+//! 2. a grid of rectangles is laid in the face's plane, aligned with its
+//!    longest outer edge and fitted to its bounding box in that frame (the
+//!    whole number of cells nearest to `len` each way). Every cell that lies
+//!    inside the face with the boundary keeping clear of it (within a quarter
+//!    cell there is no boundary point but at its corners, and no boundary
+//!    segment but its own edges or segments leaving a corner along a grid
+//!    line) becomes a rectangular patch; a rectangle therefore becomes only
+//!    rectangles, and no thin gaps are left for the triangles;
+//! 3. the rest is a constrained Delaunay triangulation (spade) of the boundary
+//!    points and the corners along the cells' outline, refined (Ruppert-style,
+//!    minimum angle `angle`, area at most 0.6·len²) with boundary segments and
+//!    cell edges kept whole; then pairs of triangles that form a well-shaped
+//!    convex quadrilateral are joined.
+//!
+//! Patches keep the face's material and orientation and are named `NAME.1`,
+//! `NAME.2`, … (unnamed faces give unnamed patches). New vertices are named
+//! after their edge (`a:b.1`) or their face (`NAME.v1`), and written just
+//! before the first patch that uses them.
+
+use geom::index::bbox;
+use geom::{BoxIndex, DVec2, DVec3, Frame};
+use rustc_hash::{FxHashMap, FxHashSet};
+use spade::{
+    AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
+};
+use ug::{Face, FaceId, Item, Model, Vertex, VertexId};
+
+#[derive(Clone, Copy, Debug)]
+pub struct Options {
+    /// Desired patch edge length (model units).
+    pub len: f64,
+    /// Distance tolerance.
+    pub eps: f64,
+    /// Minimum triangle angle aimed at by the refinement, degrees.
+    pub angle: f64,
+    /// Join pairs of triangles into convex quads.
+    pub quads: bool,
+}
+
+/// Figures about the result.
+#[derive(Clone, Debug, Default)]
+pub struct Stats {
+    pub faces: usize,
+    pub patches: usize,
+    pub quads: usize,
+    pub triangles: usize,
+    pub grid_cells: usize,
+    pub min_edge: f64,
+    pub mean_edge: f64,
+    pub max_edge: f64,
+    /// Smallest interior angle of any triangle, degrees.
+    pub worst_angle: f64,
+    /// Faces that could not be meshed (self-crossing or degenerate): passed through unchanged.
+    pub failed: Vec<String>,
+}
+
+/// The division points (interior, from the lower vertex id to the higher) of every edge.
+struct Divisions {
+    map: FxHashMap<(VertexId, VertexId), Vec<VertexId>>,
+}
+
+struct Ctx<'m> {
+    m: &'m Model,
+    opts: Options,
+    vertices: Vec<Vertex>,
+    vnames: FxHashSet<String>,
+    fnames: FxHashSet<String>,
+    div: Divisions,
+}
+
+impl Ctx<'_> {
+    fn new_vertex(&mut self, base: String, pos: DVec3) -> VertexId {
+        let mut name = base.clone();
+        let mut k = 2;
+        while self.vnames.contains(&name) {
+            name = format!("{base}.{k}");
+            k += 1;
+        }
+        self.vnames.insert(name.clone());
+        let id = VertexId(self.vertices.len() as u32);
+        self.vertices.push(Vertex {
+            name,
+            pos,
+            color: None,
+        });
+        id
+    }
+
+    fn pos(&self, v: VertexId) -> DVec3 {
+        self.vertices[v.idx()].pos
+    }
+
+    /// The vertices along edge a→b, a first, b excluded.
+    fn divided(&mut self, a: VertexId, b: VertexId) -> Vec<VertexId> {
+        let key = if a < b { (a, b) } else { (b, a) };
+        if !self.div.map.contains_key(&key) {
+            let (p, q) = (self.pos(key.0), self.pos(key.1));
+            let k = segments((q - p).length(), self.opts.len);
+            let base = format!(
+                "{}:{}",
+                self.vertices[key.0.idx()].name,
+                self.vertices[key.1.idx()].name
+            );
+            let pts: Vec<VertexId> = (1..k)
+                .map(|i| {
+                    let t = i as f64 / k as f64;
+                    self.new_vertex(format!("{base}.{i}"), p + (q - p) * t)
+                })
+                .collect();
+            self.div.map.insert(key, pts);
+        }
+        let inner = &self.div.map[&key];
+        let mut out = Vec::with_capacity(inner.len() + 1);
+        out.push(a);
+        if a == key.0 {
+            out.extend(inner.iter().copied());
+        } else {
+            out.extend(inner.iter().rev().copied());
+        }
+        out
+    }
+}
+
+/// The whole number of segments (at least 1) nearest to `length / len`.
+pub fn segments(length: f64, len: f64) -> usize {
+    ((length / len).round() as usize).max(1)
+}
+
+/// Cuts every top-level face of a flat model into patches.
+pub fn cut(m: &Model, opts: Options) -> (Model, Stats) {
+    let mut cx = Ctx {
+        m,
+        opts,
+        vertices: m.vertices.clone(),
+        vnames: m.vertices.iter().map(|v| v.name.clone()).collect(),
+        fnames: m
+            .faces
+            .iter()
+            .filter_map(|f| f.name.clone())
+            .chain(m.wires.iter().filter_map(|w| w.name.clone()))
+            .collect(),
+        div: Divisions {
+            map: FxHashMap::default(),
+        },
+    };
+    let mut stats = Stats {
+        min_edge: f64::INFINITY,
+        worst_angle: 180.0,
+        ..Stats::default()
+    };
+    let mut out = Model {
+        materials: m.materials.clone(),
+        wires: m.wires.clone(),
+        defs: m.defs.clone(),
+        instances: m.instances.clone(),
+        ..Model::default()
+    };
+    let mut emitted = m.vertices.len(); // vertices of cx.vertices already written
+    let mut edge_sum = 0.0;
+    let mut edge_count = 0usize;
+    for it in &m.items {
+        match it {
+            Item::Face(f) => {
+                stats.faces += 1;
+                let face = &m.faces[f.idx()];
+                let label = face
+                    .name
+                    .clone()
+                    .unwrap_or_else(|| format!("#{}", stats.faces));
+                let patches = mesh_face(&mut cx, *f, &mut stats).unwrap_or_else(|| {
+                    stats.failed.push(label.clone());
+                    vec![face.contours.clone()]
+                });
+                // New vertices made for this face go just before its patches.
+                flush_vertices(&cx, &mut out, &mut emitted);
+                let mut k = 0;
+                for contours in patches {
+                    if contours.len() == 1 {
+                        let c = &contours[0];
+                        for i in 0..c.len() {
+                            let l = (cx.pos(c[(i + 1) % c.len()]) - cx.pos(c[i])).length();
+                            stats.min_edge = stats.min_edge.min(l);
+                            stats.max_edge = stats.max_edge.max(l);
+                            edge_sum += l;
+                            edge_count += 1;
+                        }
+                        if c.len() == 3 {
+                            stats.triangles += 1;
+                            stats.worst_angle = stats.worst_angle.min(min_angle(&[
+                                cx.pos(c[0]),
+                                cx.pos(c[1]),
+                                cx.pos(c[2]),
+                            ]));
+                        } else {
+                            stats.quads += 1;
+                        }
+                    }
+                    stats.patches += 1;
+                    let name = face.name.as_ref().map(|n| {
+                        loop {
+                            k += 1;
+                            let cand = format!("{n}.{k}");
+                            if cx.fnames.insert(cand.clone()) {
+                                break cand;
+                            }
+                        }
+                    });
+                    let id = FaceId(out.faces.len() as u32);
+                    out.faces.push(Face {
+                        name,
+                        contours,
+                        material: face.material,
+                    });
+                    out.items.push(Item::Face(id));
+                }
+            }
+            other => out.items.push(other.clone()),
+        }
+    }
+    flush_vertices(&cx, &mut out, &mut emitted);
+    out.vertices = cx.vertices;
+    stats.mean_edge = if edge_count > 0 {
+        edge_sum / edge_count as f64
+    } else {
+        0.0
+    };
+    if edge_count == 0 {
+        stats.min_edge = 0.0;
+    }
+    (out, stats)
+}
+
+/// Writes vertex statements for the vertices created since the last call.
+fn flush_vertices(cx: &Ctx<'_>, out: &mut Model, emitted: &mut usize) {
+    for k in *emitted..cx.vertices.len() {
+        out.items.push(Item::Vertex(VertexId(k as u32)));
+    }
+    *emitted = cx.vertices.len();
+}
+
+fn min_angle(p: &[DVec3; 3]) -> f64 {
+    (0..3)
+        .map(|i| {
+            let a = p[(i + 1) % 3] - p[i];
+            let b = p[(i + 2) % 3] - p[i];
+            a.angle_between(b).to_degrees()
+        })
+        .fold(180.0, f64::min)
+}
+
+/// Patches (as contour lists of one contour each) for one face, or `None` if it cannot be meshed.
+fn mesh_face(cx: &mut Ctx<'_>, f: FaceId, stats: &mut Stats) -> Option<Vec<Vec<Vec<VertexId>>>> {
+    let m = cx.m;
+    let face = &m.faces[f.idx()];
+    let pts: Vec<Vec<DVec3>> = face
+        .contours
+        .iter()
+        .map(|c| c.iter().map(|&v| m.pos(v)).collect())
+        .collect();
+    let n = geom::face_normal(&pts)?;
+    let outer = &pts[0];
+    // Frame along the longest outer edge.
+    let (mut best, mut dir) = (0.0, DVec3::X);
+    for i in 0..outer.len() {
+        let d = outer[(i + 1) % outer.len()] - outer[i];
+        if d.length() > best {
+            best = d.length();
+            dir = d;
+        }
+    }
+    let frame = Frame::with_u(outer[0], n, dir);
+    let len = cx.opts.len;
+    let eps = cx.opts.eps;
+
+    // 1. Boundary: contours with division points.
+    let mut bcontours: Vec<Vec<VertexId>> = Vec::new();
+    for c in &face.contours {
+        let mut bc = Vec::new();
+        for i in 0..c.len() {
+            bc.extend(cx.divided(c[i], c[(i + 1) % c.len()]));
+        }
+        bcontours.push(bc);
+    }
+    let b2: Vec<Vec<DVec2>> = bcontours
+        .iter()
+        .map(|c| c.iter().map(|&v| frame.to_2d(cx.pos(v))).collect())
+        .collect();
+    let segs: Vec<(DVec2, DVec2)> = b2
+        .iter()
+        .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
+        .collect();
+    let seg_index = BoxIndex::new(segs.iter().enumerate().map(|(k, &(a, b))| {
+        let (lo, hi) = (a.min(b), a.max(b));
+        (lo.extend(0.0), hi.extend(0.0), k as u32)
+    }));
+    let bpoints: Vec<(DVec2, VertexId)> = b2
+        .iter()
+        .zip(&bcontours)
+        .flat_map(|(c2, c)| c2.iter().copied().zip(c.iter().copied()))
+        .collect();
+    let point_index = BoxIndex::new(
+        bpoints
+            .iter()
+            .enumerate()
+            .map(|(k, (p, _))| (p.extend(0.0), p.extend(0.0), k as u32)),
+    );
+
+    // 2. Grid.
+    let (lo, hi) = bbox(b2[0].iter().map(|p| p.extend(0.0)), 0.0);
+    let (lo, hi) = (lo.truncate(), hi.truncate());
+    let nx = segments(hi.x - lo.x, len);
+    let ny = segments(hi.y - lo.y, len);
+    let (du, dv) = ((hi.x - lo.x) / nx as f64, (hi.y - lo.y) / ny as f64);
+    let corner = |i: usize, j: usize| {
+        DVec2::new(
+            if i == nx { hi.x } else { lo.x + du * i as f64 },
+            if j == ny { hi.y } else { lo.y + dv * j as f64 },
+        )
+    };
+    let mut accepted = vec![false; nx * ny];
+    let margin = 0.25 * du.min(dv);
+    if nx * ny <= 50_000_000 {
+        for j in 0..ny {
+            let y = lo.y + dv * (j as f64 + 0.5);
+            // Crossings of the row's centre line (half-open rule).
+            let mut xs: Vec<f64> = segs
+                .iter()
+                .filter(|(a, b)| (a.y > y) != (b.y > y))
+                .map(|(a, b)| a.x + (y - a.y) * (b.x - a.x) / (b.y - a.y))
+                .collect();
+            xs.sort_by(f64::total_cmp);
+            for pair in xs.chunks_exact(2) {
+                let i0 = (((pair[0] - lo.x) / du).floor().max(0.0)) as usize;
+                let i1 = ((((pair[1] - lo.x) / du).ceil()) as usize).min(nx);
+                for i in i0..i1 {
+                    let cx_ = lo.x + du * (i as f64 + 0.5);
+                    if cx_ > pair[0] && cx_ < pair[1] {
+                        let (a, b) = (corner(i, j), corner(i + 1, j + 1));
+                        accepted[j * nx + i] =
+                            cell_ok(a, b, eps, margin, &segs, &seg_index, &bpoints, &point_index);
+                    }
+                }
+            }
+        }
+    }
+    stats.grid_cells += accepted.iter().filter(|&&a| a).count();
+
+    // Corner vertices of accepted cells (snapped to boundary points).
+    let mut corner_ids: FxHashMap<(usize, usize), VertexId> = FxHashMap::default();
+    let fname = face.name.clone().unwrap_or_else(|| format!("f{}", f.0 + 1));
+    let mut next_inner = 1usize;
+    let mut corner_vertex =
+        |cx: &mut Ctx<'_>, i: usize, j: usize, next_inner: &mut usize| -> VertexId {
+            if let Some(&v) = corner_ids.get(&(i, j)) {
+                return v;
+            }
+            let p = corner(i, j);
+            let near = point_index.query(
+                (p - DVec2::splat(eps)).extend(0.0),
+                (p + DVec2::splat(eps)).extend(0.0),
+            );
+            let v = match near.first() {
+                Some(&k) => bpoints[k as usize].1,
+                None => {
+                    let v = cx.new_vertex(format!("{fname}.v{next_inner}"), frame.to_3d(p));
+                    *next_inner += 1;
+                    v
+                }
+            };
+            corner_ids.insert((i, j), v);
+            v
+        };
+    let mut quads = Vec::new();
+    for j in 0..ny {
+        for i in 0..nx {
+            if accepted[j * nx + i] {
+                let q = [
+                    corner_vertex(cx, i, j, &mut next_inner),
+                    corner_vertex(cx, i + 1, j, &mut next_inner),
+                    corner_vertex(cx, i + 1, j + 1, &mut next_inner),
+                    corner_vertex(cx, i, j + 1, &mut next_inner),
+                ];
+                quads.push(q);
+            }
+        }
+    }
+    let is_acc = |i: isize, j: isize| {
+        i >= 0
+            && j >= 0
+            && (i as usize) < nx
+            && (j as usize) < ny
+            && accepted[j as usize * nx + i as usize]
+    };
+    // Outline of the accepted cells: cell edges with an accepted cell on one side only.
+    let mut outline: Vec<(VertexId, VertexId)> = Vec::new();
+    for j in 0..ny as isize {
+        for i in 0..nx as isize {
+            if !is_acc(i, j) {
+                continue;
+            }
+            let c = |a: isize, b: isize| corner_ids[&(a as usize, b as usize)];
+            if !is_acc(i, j - 1) {
+                outline.push((c(i, j), c(i + 1, j)));
+            }
+            if !is_acc(i + 1, j) {
+                outline.push((c(i + 1, j), c(i + 1, j + 1)));
+            }
+            if !is_acc(i, j + 1) {
+                outline.push((c(i + 1, j + 1), c(i, j + 1)));
+            }
+            if !is_acc(i - 1, j) {
+                outline.push((c(i, j + 1), c(i, j)));
+            }
+        }
+    }
+
+    // 3. Constrained Delaunay triangulation of the rest, refined.
+    let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> =
+        ConstrainedDelaunayTriangulation::new();
+    let mut ids: Vec<VertexId> = Vec::new();
+    let mut handle: FxHashMap<VertexId, spade::handles::FixedVertexHandle> = FxHashMap::default();
+    let mut insert = |cdt: &mut ConstrainedDelaunayTriangulation<Point2<f64>>,
+                      ids: &mut Vec<VertexId>,
+                      v: VertexId,
+                      p: DVec2|
+     -> Option<()> {
+        if handle.contains_key(&v) {
+            return Some(());
+        }
+        let h = cdt.insert(Point2::new(p.x, p.y)).ok()?;
+        if h.index() != ids.len() {
+            return None; // two vertices at one position
+        }
+        ids.push(v);
+        handle.insert(v, h);
+        Some(())
+    };
+    for (p, v) in &bpoints {
+        insert(&mut cdt, &mut ids, *v, *p)?;
+    }
+    for &(a, b) in &outline {
+        for v in [a, b] {
+            let p = frame.to_2d(cx.pos(v));
+            insert(&mut cdt, &mut ids, v, p)?;
+        }
+    }
+    let constrain = |cdt: &mut ConstrainedDelaunayTriangulation<Point2<f64>>,
+                     a: VertexId,
+                     b: VertexId|
+     -> Option<()> {
+        let (ha, hb) = (handle[&a], handle[&b]);
+        if ha == hb || !cdt.can_add_constraint(ha, hb) {
+            return None;
+        }
+        cdt.add_constraint(ha, hb);
+        Some(())
+    };
+    for c in &bcontours {
+        for i in 0..c.len() {
+            constrain(&mut cdt, c[i], c[(i + 1) % c.len()])?;
+        }
+    }
+    for &(a, b) in &outline {
+        constrain(&mut cdt, a, b)?;
+    }
+    let before = cdt.num_vertices();
+    let params = RefinementParameters::<f64>::new()
+        .exclude_outer_faces(true)
+        .keep_constraint_edges()
+        .with_angle_limit(AngleLimit::from_deg(cx.opts.angle))
+        .with_max_allowed_area(0.6 * len * len)
+        .with_min_required_area(1e-4 * len * len)
+        .with_max_additional_vertices(20 * before + 1000);
+    cdt.refine(params);
+    for k in before..cdt.num_vertices() {
+        let p = cdt.vertices().nth(k).map(|v| v.position())?;
+        let v = cx.new_vertex(
+            format!("{fname}.v{next_inner}"),
+            frame.to_3d(DVec2::new(p.x, p.y)),
+        );
+        next_inner += 1;
+        ids.push(v);
+    }
+    let in_cell = |p: DVec2| {
+        let i = ((p.x - lo.x) / du).floor();
+        let j = ((p.y - lo.y) / dv).floor();
+        is_acc(i as isize, j as isize)
+    };
+    // Inside or outside, decided topologically: a flood fill over the
+    // triangles from the convex hull, switching sides at every boundary
+    // segment (cell outlines do not count). Point location would be fooled
+    // by boundary points that are collinear only up to rounding.
+    let key = |a: usize, b: usize| (a.min(b), a.max(b));
+    let boundary: FxHashSet<(usize, usize)> = bcontours
+        .iter()
+        .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
+        .map(|(a, b)| key(handle[&a].index(), handle[&b].index()))
+        .collect();
+    let mut inside: Vec<Option<bool>> = vec![None; cdt.num_all_faces()];
+    let mut queue = std::collections::VecDeque::new();
+    for tri in cdt.inner_faces() {
+        for e in tri.adjacent_edges() {
+            if e.rev().face().is_outer() && inside[tri.fix().index()].is_none() {
+                let crossing =
+                    boundary.contains(&key(e.from().fix().index(), e.to().fix().index()));
+                inside[tri.fix().index()] = Some(crossing);
+                queue.push_back(tri.fix());
+            }
+        }
+    }
+    while let Some(fh) = queue.pop_front() {
+        let tri = cdt.face(fh);
+        let here = inside[fh.index()].unwrap_or(false);
+        for e in tri.adjacent_edges() {
+            let Some(g) = e.rev().face().as_inner() else {
+                continue;
+            };
+            if inside[g.fix().index()].is_some() {
+                continue;
+            }
+            let crossing = boundary.contains(&key(e.from().fix().index(), e.to().fix().index()));
+            inside[g.fix().index()] = Some(here ^ crossing);
+            queue.push_back(g.fix());
+        }
+    }
+    let mut tris: Vec<[VertexId; 3]> = Vec::new();
+    for tri in cdt.inner_faces() {
+        if inside[tri.fix().index()] != Some(true) {
+            continue;
+        }
+        let vs = tri.vertices();
+        let p = vs.map(|v| DVec2::new(v.position().x, v.position().y));
+        if in_cell((p[0] + p[1] + p[2]) / 3.0) {
+            continue;
+        }
+        tris.push(vs.map(|v| ids[v.fix().index()]));
+    }
+    let mut patches: Vec<Vec<Vec<VertexId>>> =
+        quads.into_iter().map(|q| vec![q.to_vec()]).collect();
+    let joined = if cx.opts.quads {
+        join_pairs(cx, &tris, n)
+    } else {
+        tris.iter().map(|t| t.to_vec()).collect()
+    };
+    patches.extend(joined.into_iter().map(|c| vec![c]));
+    Some(patches)
+}
+
+/// Whether the grid cell [a, b] can be a patch: it lies inside the face (its
+/// centre was found inside by the caller), and the boundary keeps away from
+/// it — within `margin` of it there is no boundary point but at its corners,
+/// and no boundary segment but its own edges and segments that leave a corner
+/// along the line of one of its edges. So the triangles around the cells never
+/// have to fill a thin gap.
+#[allow(clippy::too_many_arguments)]
+fn cell_ok(
+    a: DVec2,
+    b: DVec2,
+    eps: f64,
+    margin: f64,
+    segs: &[(DVec2, DVec2)],
+    seg_index: &BoxIndex,
+    bpoints: &[(DVec2, VertexId)],
+    point_index: &BoxIndex,
+) -> bool {
+    let corners = [a, DVec2::new(b.x, a.y), b, DVec2::new(a.x, b.y)];
+    let corner_of = |p: DVec2| corners.iter().position(|c| (*c - p).length() <= eps);
+    let (lo, hi) = (
+        (a - DVec2::splat(margin)).extend(0.0),
+        (b + DVec2::splat(margin)).extend(0.0),
+    );
+    for k in point_index.query(lo, hi) {
+        if corner_of(bpoints[k as usize].0).is_none() {
+            return false;
+        }
+    }
+    let on_edge_line = |c: usize, q: DVec2| {
+        let p = corners[c];
+        (q.x - p.x).abs() <= eps || (q.y - p.y).abs() <= eps
+    };
+    for k in seg_index.query(lo, hi) {
+        let (p, q) = segs[k as usize];
+        match (corner_of(p), corner_of(q)) {
+            // One of the cell's own edges.
+            (Some(i), Some(j)) if (i + 1) % 4 == j || (j + 1) % 4 == i => continue,
+            (Some(i), None)
+                if on_edge_line(i, q)
+                    && !clips(p, q, a + DVec2::splat(eps), b - DVec2::splat(eps)) =>
+            {
+                continue;
+            }
+            (None, Some(j))
+                if on_edge_line(j, p)
+                    && !clips(p, q, a + DVec2::splat(eps), b - DVec2::splat(eps)) =>
+            {
+                continue;
+            }
+            _ => {}
+        }
+        // Any other segment must stay `margin` away from the cell.
+        if clips(p, q, a - DVec2::splat(margin), b + DVec2::splat(margin)) {
+            return false;
+        }
+    }
+    true
+}
+
+/// Whether segment p–q meets the open box (lo, hi) (Liang–Barsky).
+fn clips(p: DVec2, q: DVec2, lo: DVec2, hi: DVec2) -> bool {
+    if lo.x >= hi.x || lo.y >= hi.y {
+        return false;
+    }
+    let d = q - p;
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for (pk, qk) in [
+        (-d.x, p.x - lo.x),
+        (d.x, hi.x - p.x),
+        (-d.y, p.y - lo.y),
+        (d.y, hi.y - p.y),
+    ] {
+        if pk == 0.0 {
+            if qk <= 0.0 {
+                return false;
+            }
+        } else {
+            let r = qk / pk;
+            if pk < 0.0 {
+                t0 = t0.max(r);
+            } else {
+                t1 = t1.min(r);
+            }
+        }
+    }
+    t0 < t1
+}
+
+/// Greedily joins pairs of triangles sharing an edge into convex quads whose
+/// angles all lie within 45° of a right angle (best pairs first).
+fn join_pairs(cx: &Ctx<'_>, tris: &[[VertexId; 3]], n: DVec3) -> Vec<Vec<VertexId>> {
+    let mut by_edge: FxHashMap<(VertexId, VertexId), usize> = FxHashMap::default();
+    for (k, t) in tris.iter().enumerate() {
+        for i in 0..3 {
+            by_edge.insert((t[i], t[(i + 1) % 3]), k);
+        }
+    }
+    let mut cands: Vec<(f64, usize, usize, [VertexId; 4])> = Vec::new();
+    for (k, t) in tris.iter().enumerate() {
+        for i in 0..3 {
+            let (a, b, c) = (t[i], t[(i + 1) % 3], t[(i + 2) % 3]);
+            let Some(&o) = by_edge.get(&(b, a)) else {
+                continue;
+            };
+            if o <= k {
+                continue;
+            }
+            let ot = tris[o];
+            let Some(d) = ot.iter().copied().find(|&x| x != a && x != b) else {
+                continue;
+            };
+            // Quad a, d, b, c (the shared edge a–b removed).
+            let q = [a, d, b, c];
+            let p = q.map(|v| cx.pos(v));
+            let mut worst: f64 = 0.0;
+            let mut convex = true;
+            for j in 0..4 {
+                let e1 = p[(j + 1) % 4] - p[j];
+                let e0 = p[j] - p[(j + 3) % 4];
+                if e0.cross(e1).dot(n) <= 0.0 {
+                    convex = false;
+                }
+                let ang = (-e0).angle_between(e1).to_degrees();
+                worst = worst.max((ang - 90.0).abs());
+            }
+            if convex && worst < 45.0 {
+                cands.push((worst, k, o, q));
+            }
+        }
+    }
+    cands.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2)));
+    let mut used = vec![false; tris.len()];
+    let mut out: Vec<Vec<VertexId>> = Vec::new();
+    let mut quads_at: Vec<Option<[VertexId; 4]>> = vec![None; tris.len()];
+    for (_, k, o, q) in cands {
+        if used[k] || used[o] {
+            continue;
+        }
+        used[k] = true;
+        used[o] = true;
+        quads_at[k.min(o)] = Some(q);
+    }
+    for (k, t) in tris.iter().enumerate() {
+        if let Some(q) = quads_at[k] {
+            out.push(q.to_vec());
+        } else if !used[k] {
+            out.push(t.to_vec());
+        }
+    }
+    out
+}

@@ -1,0 +1,88 @@
+//! ugcut: surfaces into patches.
+
+use clap::Parser;
+
+const EXAMPLES: &str = "\
+Examples:
+  ugcut -l 2 < clean.ug > patches.ug       patches of about 2 units
+  ugcut -l 2% building.ug -o patches.ug    2% of the model's bounding-box diagonal
+  ugvlmerge < in.ug | ugisect | ugcut -l 0.5 | ugrad > lit.ug";
+
+/// Cut every surface of a UniGrafix model into triangle and convex-quad
+/// patches of about a given edge length, without T-vertices.
+///
+/// Boundary edges are divided into the whole number of equal segments nearest
+/// to LEN (identically for faces that share the edge); a grid of rectangles
+/// aligned with the face's longest edge fills what it can (a rectangle gives
+/// only rectangles); the rest is a refined constrained Delaunay triangulation
+/// with pairs of triangles joined into convex quads. Run ugvlmerge first so
+/// that each surface is one face. Instances are flattened.
+#[derive(Parser, Debug)]
+#[command(version, after_help = EXAMPLES)]
+struct Args {
+    #[command(flatten)]
+    common: cli::Common,
+    /// Desired patch edge length: model units, or a percentage of the bounding-box diagonal ("2%").
+    #[arg(short = 'l', long = "length", value_name = "LEN", required = true)]
+    len: String,
+    /// Distance tolerance in model units (default: 1e-6 of the bounding-box diagonal).
+    #[arg(short = 'e', long = "epsilon", value_parser = cli::parse_epsilon)]
+    epsilon: Option<f64>,
+    /// Smallest triangle angle the refinement aims for, degrees (at most 33).
+    #[arg(long, default_value_t = 25.0, value_parser = parse_angle)]
+    angle: f64,
+    /// Keep triangles (do not join pairs into quads).
+    #[arg(long)]
+    triangles: bool,
+}
+
+fn parse_angle(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if (0.0..=33.0).contains(&v) => Ok(v),
+        _ => Err(format!("'{s}' is not an angle between 0 and 33 degrees")),
+    }
+}
+
+fn main() -> std::process::ExitCode {
+    let args = Args::parse();
+    cli::run(|| {
+        let c = &args.common;
+        let model = c.load_flat()?;
+        let diag = model.bounds().map_or(0.0, |(lo, hi)| (hi - lo).length());
+        let len = match args.len.strip_suffix('%') {
+            Some(p) => p.trim().parse::<f64>().ok().map(|p| p / 100.0 * diag),
+            None => args.len.trim().parse::<f64>().ok(),
+        };
+        let len = len.filter(|l| l.is_finite() && *l > 0.0).ok_or_else(|| {
+            cli::Failure::input(format!(
+                "error: -l '{}' is not a positive length or percentage",
+                args.len
+            ))
+        })?;
+        let eps = cli::epsilon(args.epsilon, &model);
+        if len <= 10.0 * eps {
+            return Err(cli::Failure::input(format!(
+                "error: -l {len} is not larger than 10 × epsilon ({eps:e})"
+            )));
+        }
+        let opts = ugcut::Options {
+            len,
+            eps,
+            angle: args.angle,
+            quads: !args.triangles,
+        };
+        let (out, st) = ugcut::cut(&model, opts);
+        if !c.quiet {
+            for f in &st.failed {
+                eprintln!(
+                    "warning: face {f} could not be meshed (its contours cross or touch); passed through unchanged"
+                );
+            }
+        }
+        c.verbose(format!(
+            "length {len}, epsilon {eps:e}: {} faces → {} patches ({} quads of which {} grid cells, {} triangles); edges min {:.4} mean {:.4} max {:.4}; worst triangle angle {:.1}°",
+            st.faces, st.patches, st.quads, st.grid_cells, st.triangles, st.min_edge, st.mean_edge, st.max_edge, st.worst_angle
+        ));
+        c.write_model(&out)
+    })
+}

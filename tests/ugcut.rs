@@ -1,0 +1,177 @@
+//! ugcut end to end: patches are triangles and convex quads, no T-vertex,
+//! area kept, rectangles from rectangles, edge lengths near LEN.
+
+use ugkit::{fixture, run, run_ok};
+
+fn check(text: &str) -> serde_json::Value {
+    serde_json::from_str(&run_ok("ugcheck", &["--json"], Some(text.as_bytes()))).unwrap()
+}
+
+fn count(r: &serde_json::Value, key: &str) -> usize {
+    r[key].as_array().unwrap().len()
+}
+
+/// Runs ugcut -v and returns (output, min edge, mean edge, max edge, worst triangle angle).
+fn cut(input: &[u8], len: &str) -> (String, [f64; 4]) {
+    let out = run("ugcut", &["-v", "-l", len], Some(input));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8(out.stderr).unwrap();
+    let line = err
+        .lines()
+        .find(|l| l.contains("worst triangle angle"))
+        .expect("statistics line");
+    let num_after = |key: &str| -> f64 {
+        let rest = &line[line.find(key).unwrap() + key.len()..];
+        rest.trim_start()
+            .split(|c: char| c == ' ' || c == ';' || c == '°')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    (
+        String::from_utf8(out.stdout).unwrap(),
+        [
+            num_after("edges min"),
+            num_after("mean"),
+            num_after("max"),
+            num_after("worst triangle angle"),
+        ],
+    )
+}
+
+fn assert_good_patches(name: &str, input: &[u8], len: f64) -> String {
+    let before = check(std::str::from_utf8(input).unwrap());
+    let (out, [min, mean, max, worst]) = cut(input, &len.to_string());
+    let after = check(&out);
+    for key in [
+        "nonpatch",
+        "tvertices",
+        "degenerate",
+        "inconsistent",
+        "nonplanar",
+        "overlapping",
+        "coincident",
+    ] {
+        assert_eq!(count(&after, key), 0, "{name}: {key}: {}", after[key]);
+    }
+    // Area per material kept to 1e-9.
+    let a = before["area_by_material"].as_array().unwrap();
+    let b = after["area_by_material"].as_array().unwrap();
+    assert_eq!(a.len(), b.len());
+    for (x, y) in a.iter().zip(b) {
+        assert_eq!(x["material"], y["material"]);
+        let (x, y) = (x["area"].as_f64().unwrap(), y["area"].as_f64().unwrap());
+        assert!((x - y).abs() <= 1e-9 * x, "{name}: area {x} → {y}");
+    }
+    // Patch edges within a factor of LEN (0.4–1.5) and no triangle angle below 20°.
+    assert!(
+        min >= 0.4 * len && max <= 1.5 * len,
+        "{name}: edges {min}..{max} for LEN {len}"
+    );
+    assert!(
+        (0.8 * len..=1.2 * len).contains(&mean),
+        "{name}: mean edge {mean}"
+    );
+    assert!(worst >= 20.0, "{name}: worst angle {worst}");
+    out
+}
+
+#[test]
+fn fixtures_become_good_patches() {
+    for name in [
+        "rectangle",
+        "l-room",
+        "window-wall",
+        "triangle",
+        "circle",
+        "corner",
+    ] {
+        let input = std::fs::read(fixture(&format!("cut/{name}.ug"))).unwrap();
+        assert_good_patches(name, &input, 1.0);
+    }
+}
+
+#[test]
+fn a_rectangle_becomes_only_rectangles_of_the_nearest_division() {
+    let input = std::fs::read(fixture("cut/rectangle.ug")).unwrap();
+    let out = assert_good_patches("rectangle", &input, 2.0);
+    let m = ug::parse(out.as_bytes(), "out").unwrap().model;
+    // 7.6 / 2 → 4 segments of 1.9; 4 / 2 → 2 segments of 2.
+    assert_eq!(m.faces.len(), 8);
+    for f in &m.faces {
+        let p: Vec<_> = f.contours[0].iter().map(|&v| m.pos(v)).collect();
+        assert_eq!(p.len(), 4);
+        let (w, h) = ((p[1] - p[0]).length(), (p[2] - p[1]).length());
+        assert!(
+            (w - 1.9).abs() < 1e-12 && (h - 2.0).abs() < 1e-12,
+            "{w} x {h}"
+        );
+        assert!(
+            ((p[2] - p[0]).length() - (w * w + h * h).sqrt()).abs() < 1e-12,
+            "not a rectangle"
+        );
+    }
+    let names: Vec<_> = m.faces.iter().map(|f| f.name.clone().unwrap()).collect();
+    assert_eq!(names[0], "wall.1");
+    assert_eq!(names[7], "wall.8");
+}
+
+#[test]
+fn shared_edges_are_divided_identically() {
+    let input = std::fs::read(fixture("cut/corner.ug")).unwrap();
+    let out = assert_good_patches("corner", &input, 0.7);
+    // The shared edge d–c (7 long) is divided into 10 segments used by both surfaces.
+    let m = ug::parse(out.as_bytes(), "out").unwrap().model;
+    let on_edge = m
+        .vertices
+        .iter()
+        .filter(|v| v.name.starts_with("c:d.") || v.name.starts_with("d:c."))
+        .count();
+    assert_eq!(on_edge, 9);
+}
+
+#[test]
+fn cornell_box_after_ugplanar() {
+    let planar = run_ok(
+        "ugplanar",
+        &[fixture("cornell-box.ug").to_str().unwrap()],
+        None,
+    );
+    assert_good_patches("cornell-box", planar.as_bytes(), 50.0);
+}
+
+#[test]
+fn length_as_percentage_and_bad_lengths() {
+    let p = fixture("cut/rectangle.ug");
+    let p = p.to_str().unwrap();
+    // The diagonal of the 7.6 x 4 rectangle is 8.588…; 23.29% of it ≈ 2.
+    let a = run_ok("ugcut", &["-l", "23.29%", p], None);
+    let b = run_ok("ugcut", &["-l", "2", p], None);
+    assert_eq!(
+        a.lines().filter(|l| l.starts_with("f ")).count(),
+        b.lines().filter(|l| l.starts_with("f ")).count()
+    );
+    for bad in ["0", "-1", "abc", "%"] {
+        let out = run("ugcut", &["-l", bad, p], None);
+        assert_eq!(out.status.code(), Some(2), "-l {bad}");
+        assert!(out.stdout.is_empty());
+    }
+    assert_eq!(
+        run("ugcut", &[p], None).status.code(),
+        Some(2),
+        "-l is required"
+    );
+}
+
+#[test]
+fn output_is_deterministic() {
+    let p = fixture("cut/l-room.ug");
+    let a = run_ok("ugcut", &["-l", "0.7", p.to_str().unwrap()], None);
+    let b = run_ok("ugcut", &["-l", "0.7", p.to_str().unwrap()], None);
+    assert_eq!(a, b);
+}
