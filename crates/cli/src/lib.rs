@@ -55,7 +55,7 @@ pub struct Common {
     #[arg(value_name = "FILE")]
     pub input: Option<PathBuf>,
     /// Write the result to FILE (atomically) instead of stdout.
-    #[arg(short = 'o', long = "output", value_name = "FILE")]
+    #[arg(short = 'o', long = "out", value_name = "FILE")]
     pub output: Option<PathBuf>,
     /// No progress or warnings on stderr.
     #[arg(short = 'q', long, conflicts_with = "verbose")]

@@ -1,0 +1,1459 @@
+//! The grouper, `ugvlmerge` (Smith 1991, §2.4): from the common
+//! representation of a model (convex polygons with T-vertices and duplicated
+//! vertices) to the ideal one (connected, complex faces).
+//!
+//! Three steps, each on the winged-edge [`Mesh`], each of which can be skipped:
+//!
+//! 1. [`merge_vertices`]: vertices within epsilon of an earlier vertex (in
+//!    statement order) are replaced by it, found with an R*-tree. Faces left
+//!    without area are dropped (the caller warns).
+//! 2. [`split_edges`]: every vertex of a face that lies within epsilon of the
+//!    interior of an edge is inserted into that edge, in every face that uses
+//!    it, in order along the edge (no T-vertex remains). Edges are looked up
+//!    in an R*-tree of the vertices, one query per edge.
+//! 3. [`merge_faces`]: faces of the same material that share an edge, face the
+//!    same way and lie in one plane are joined into one face, which may have
+//!    holes (a wall around a window). Groups grow from their first face in
+//!    statement order, which keeps its name and place. Boundary vertices the
+//!    join left between two collinear edges of the joined face, and used by
+//!    nothing else, are dropped.
+//!
+//! Everything is deterministic (no hash-map order reaches the output) and
+//! near-linear: spatial-index queries, no all-pairs loops.
+
+use std::collections::hash_map::Entry;
+use std::time::{Duration, Instant};
+
+use geom::{BoxIndex, DVec2, DVec3, Frame, Plane, newell_normal, point_segment_distance};
+use rustc_hash::{FxHashMap, FxHashSet};
+use ug::{FaceId, Model, VertexId};
+use winged::{EdgeId, Mesh, Repair};
+
+/// Default largest angle between the normals of faces that are joined, in degrees.
+pub const DEFAULT_ANGLE: f64 = 1.0;
+
+/// Edge splitting repeats on the edges it created until nothing changes, at most this often.
+const MAX_SPLIT_PASSES: usize = 16;
+
+/// Longest run of collinear boundary vertices dropped between two kept ones.
+const MAX_COLLINEAR_RUN: usize = 64;
+
+/// What to do.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Options {
+    /// The distance tolerance (model units).
+    pub eps: f64,
+    /// Largest angle between the normals of joined faces, in degrees.
+    pub angle: f64,
+    pub merge_vertices: bool,
+    pub split_edges: bool,
+    pub merge_faces: bool,
+}
+
+impl Options {
+    /// All three steps, the default angle.
+    pub fn new(eps: f64) -> Options {
+        Options {
+            eps,
+            angle: DEFAULT_ANGLE,
+            merge_vertices: true,
+            split_edges: true,
+            merge_faces: true,
+        }
+    }
+}
+
+/// A face that was dropped, and why.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Dropped {
+    /// Its UG name, or `#k` for the k-th face of the input (from 1).
+    pub face: String,
+    pub reason: String,
+}
+
+/// What the grouper did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Stats {
+    pub faces_in: usize,
+    pub vertices_in: usize,
+    /// Vertices replaced by an earlier one within epsilon.
+    pub vertices_merged: usize,
+    /// Faces dropped for having no area, in statement order.
+    pub dropped: Vec<Dropped>,
+    /// Vertices inserted into edges (T-vertices removed).
+    pub tvertices: usize,
+    /// Edges split (an edge with several T-vertices counts once per pass).
+    pub edges_split: usize,
+    /// Faces joined into an earlier face (and so removed).
+    pub faces_joined: usize,
+    /// Joined faces written (each made of at least two input faces).
+    pub groups: usize,
+    /// Holes and islands of the joined faces.
+    pub holes: usize,
+    /// Collinear boundary vertices dropped from joined faces.
+    pub collinear: usize,
+    /// Vertices no face used any more (merged, dropped or inside joined faces), removed.
+    pub unused_removed: usize,
+    pub faces_out: usize,
+    pub vertices_out: usize,
+    /// Time per step: merge vertices, split edges, merge faces.
+    pub times: [Duration; 3],
+}
+
+/// Runs the enabled steps on a model (flattened first if needed).
+pub fn vlmerge(model: Model, opts: &Options) -> Result<(Model, Stats), ug::Diagnostic> {
+    let model = if model.is_flat() {
+        model
+    } else {
+        model.flatten()?
+    };
+    let labels = face_labels(&model);
+    let label = |f: FaceId| labels.get(f.idx()).cloned().flatten().unwrap_or_default();
+    let mut st = Stats {
+        faces_in: model.top_faces().count(),
+        vertices_in: model.top_vertices().count(),
+        ..Stats::default()
+    };
+    let mut mesh = Mesh::try_from_model(model)?;
+    let nv = mesh.model().vertices.len();
+    let used_before: Vec<bool> = (0..nv)
+        .map(|v| !mesh.vertex_edges(VertexId(v as u32)).is_empty())
+        .collect();
+    for r in mesh.repairs() {
+        if let Repair::DroppedFace { face } = r {
+            st.dropped.push(Dropped {
+                face: label(*face),
+                reason: "fewer than 3 distinct vertices".to_string(),
+            });
+        }
+    }
+
+    let t = Instant::now();
+    if opts.merge_vertices {
+        let (merged, dropped) = merge_vertices(&mut mesh, opts.eps);
+        st.vertices_merged = merged;
+        st.dropped
+            .extend(dropped.into_iter().map(|(f, reason)| Dropped {
+                face: label(f),
+                reason,
+            }));
+    }
+    st.times[0] = t.elapsed();
+
+    let t = Instant::now();
+    if opts.split_edges {
+        let s = split_edges(&mut mesh, opts.eps);
+        st.tvertices = s.inserted;
+        st.edges_split = s.edges;
+    }
+    st.times[1] = t.elapsed();
+
+    let t = Instant::now();
+    if opts.merge_faces {
+        let j = merge_faces(&mut mesh, opts.eps, opts.angle);
+        st.groups = j.groups;
+        st.faces_joined = j.joined;
+        st.holes = j.holes;
+        st.collinear = j.collinear;
+    }
+    st.times[2] = t.elapsed();
+
+    // Vertices that faces used before and no face uses now go.
+    for (v, &was) in used_before.iter().enumerate() {
+        let v = VertexId(v as u32);
+        if was && mesh.vertex_edges(v).is_empty() && mesh.remove_vertex(v) {
+            st.unused_removed += 1;
+        }
+    }
+    let out = mesh.into_model();
+    st.faces_out = out.top_faces().count();
+    st.vertices_out = out.top_vertices().count();
+    Ok((out, st))
+}
+
+/// Per face id: its name, or `#k` for the k-th top-level face (from 1), as `ugcheck` names it.
+fn face_labels(m: &Model) -> Vec<Option<String>> {
+    let mut labels = vec![None; m.faces.len()];
+    for (k, f) in m.top_faces().enumerate() {
+        if let Some(l) = labels.get_mut(f.idx())
+            && l.is_none()
+        {
+            *l = Some(
+                m.faces[f.idx()]
+                    .name
+                    .clone()
+                    .unwrap_or_else(|| format!("#{}", k + 1)),
+            );
+        }
+    }
+    labels
+}
+
+/// Why a live face has no usable area, decided as `ugcheck` does: an edge no
+/// longer than `eps`, or an outer contour whose area is at most `eps` times
+/// the face's size. `None` for a sound face.
+pub fn degeneracy(mesh: &Mesh, f: FaceId, eps: f64) -> Option<&'static str> {
+    let pts = mesh.face_points(f);
+    if pts.is_empty() {
+        return Some("no contour");
+    }
+    for c in &pts {
+        let n = c.len();
+        if (0..n).any(|i| c[i].distance(c[(i + 1) % n]) <= eps) {
+            return Some("a zero-length edge");
+        }
+    }
+    let (lo, hi) = geom::index::bbox(pts.iter().flatten().copied(), 0.0);
+    let size = (hi - lo).length();
+    let area = newell_normal(&pts[0]).length() / 2.0;
+    // NaN counts as no area.
+    if area.partial_cmp(&(eps * size)) != Some(std::cmp::Ordering::Greater) {
+        return Some("zero area (its vertices are collinear)");
+    }
+    None
+}
+
+/// An R*-tree of vertex positions (point boxes).
+fn point_index(mesh: &Mesh, verts: &[VertexId]) -> BoxIndex {
+    BoxIndex::new(verts.iter().map(|&v| {
+        let p = mesh.pos(v);
+        (p, p, v.0)
+    }))
+}
+
+/// Vertex positions in an R*-tree, queried along segments.
+struct Points {
+    tree: BoxIndex,
+    /// Segments whose box is wide in two or more directions are queried in
+    /// pieces no wider than this (1/256 of the points' bounding-box diagonal),
+    /// so that a long diagonal edge does not look at half the model.
+    step: f64,
+}
+
+impl Points {
+    fn new(mesh: &Mesh, verts: &[VertexId]) -> Points {
+        let (lo, hi) = geom::index::bbox(verts.iter().map(|&v| mesh.pos(v)), 0.0);
+        let diag = (hi - lo).length();
+        Points {
+            tree: point_index(mesh, verts),
+            step: if diag > 0.0 {
+                diag / 256.0
+            } else {
+                f64::INFINITY
+            },
+        }
+    }
+
+    /// Ids of the points in the boxes around the segment [a, b] grown by
+    /// `eps` (a superset of those within `eps` of it), ascending.
+    fn along(&self, a: DVec3, b: DVec3, eps: f64) -> Vec<u32> {
+        let pad = DVec3::splat(eps);
+        let mut ext = (b - a).abs().to_array();
+        ext.sort_by(f64::total_cmp);
+        let pieces = if ext[1] > self.step {
+            (ext[1] / self.step).ceil().min(1024.0) as usize
+        } else {
+            1
+        };
+        if pieces == 1 {
+            return self.tree.query(a.min(b) - pad, a.max(b) + pad);
+        }
+        let mut ids = Vec::new();
+        for k in 0..pieces {
+            let p = a.lerp(b, k as f64 / pieces as f64);
+            let q = a.lerp(b, (k + 1) as f64 / pieces as f64);
+            ids.extend(self.tree.query(p.min(q) - pad, p.max(q) + pad));
+        }
+        ids.sort_unstable();
+        ids.dedup();
+        ids
+    }
+}
+
+/// Step 1: replaces every vertex that lies within `eps` of an earlier vertex
+/// (statement order) that is itself kept, by the earliest such vertex, in
+/// faces and wires, and removes it. Then drops faces that are left without
+/// area. Returns the number of vertices merged and the dropped faces with
+/// the reason, in statement order.
+pub fn merge_vertices(mesh: &mut Mesh, eps: f64) -> (usize, Vec<(FaceId, String)>) {
+    let order: Vec<VertexId> = mesh.vertices().collect();
+    let nv = mesh.model().vertices.len();
+    let mut rank = vec![u32::MAX; nv];
+    for (k, &v) in order.iter().enumerate() {
+        rank[v.idx()] = k as u32;
+    }
+    // Exact repeats follow the first vertex at their position (which is kept
+    // or follows the same earlier vertex as they would); only the first
+    // vertex at each position goes into the R*-tree.
+    let key = |p: DVec3| (p + DVec3::ZERO).to_array().map(f64::to_bits); // -0 == 0
+    let mut first_at: FxHashMap<[u64; 3], VertexId> = FxHashMap::default(); // lookup only
+    let mut exact: Vec<Option<VertexId>> = vec![None; nv];
+    let mut distinct: Vec<VertexId> = Vec::with_capacity(order.len());
+    for &v in &order {
+        match first_at.entry(key(mesh.pos(v))) {
+            Entry::Occupied(e) => exact[v.idx()] = Some(*e.get()),
+            Entry::Vacant(e) => {
+                e.insert(v);
+                distinct.push(v);
+            }
+        }
+    }
+    let index = point_index(mesh, &distinct);
+    let mut rep: Vec<VertexId> = (0..nv as u32).map(VertexId).collect();
+    let pad = DVec3::splat(eps);
+    let mut merged = 0;
+    for &v in &order {
+        if let Some(first) = exact[v.idx()] {
+            rep[v.idx()] = rep[first.idx()];
+            merged += 1;
+            continue;
+        }
+        let p = mesh.pos(v);
+        let mut best: Option<VertexId> = None;
+        for id in index.query(p - pad, p + pad) {
+            let u = VertexId(id);
+            if rank[u.idx()] >= rank[v.idx()] || rep[u.idx()] != u {
+                continue;
+            }
+            if mesh.pos(u).distance(p) > eps {
+                continue;
+            }
+            if best.is_none_or(|b| rank[u.idx()] < rank[b.idx()]) {
+                best = Some(u);
+            }
+        }
+        if let Some(u) = best {
+            rep[v.idx()] = u;
+            merged += 1;
+        }
+    }
+
+    let faces: Vec<FaceId> = mesh.faces().collect();
+    let mut dropped = Vec::new();
+    if merged > 0 {
+        for &f in &faces {
+            let face = mesh.face(f);
+            if !face.contours.iter().flatten().any(|&v| rep[v.idx()] != v) {
+                continue;
+            }
+            let contours: Vec<Vec<VertexId>> = face
+                .contours
+                .iter()
+                .map(|c| c.iter().map(|&v| rep[v.idx()]).collect())
+                .collect();
+            if distinct_after_cleaning(&contours[0]) < 3 {
+                mesh.remove_face(f);
+                dropped.push((
+                    f,
+                    "fewer than 3 distinct vertices after merging nearly coincident vertices"
+                        .to_string(),
+                ));
+            } else {
+                // Holes left without three distinct vertices are dropped here.
+                mesh.set_face_contours(f, contours);
+            }
+        }
+        let in_wire: FxHashSet<VertexId> = mesh
+            .model()
+            .wires
+            .iter()
+            .flat_map(|w| w.polylines.iter().flatten().copied())
+            .collect();
+        for &v in &order {
+            let r = rep[v.idx()];
+            if r != v {
+                if in_wire.contains(&v) {
+                    mesh.replace_vertex(v, r); // faces no longer use v: only wires change
+                }
+                mesh.remove_vertex(v);
+            }
+        }
+    }
+    for &f in &faces {
+        if mesh.is_face_live(f)
+            && let Some(reason) = degeneracy(mesh, f, eps)
+        {
+            mesh.remove_face(f);
+            dropped.push((f, reason.to_string()));
+        }
+    }
+    let mut frank = vec![u32::MAX; mesh.model().faces.len()];
+    for (k, &f) in faces.iter().enumerate() {
+        frank[f.idx()] = k as u32;
+    }
+    dropped.sort_by_key(|(f, _)| frank[f.idx()]);
+    (merged, dropped)
+}
+
+/// Distinct vertices of a contour once consecutive repeats are removed.
+fn distinct_after_cleaning(c: &[VertexId]) -> usize {
+    let mut d: Vec<VertexId> = c.to_vec();
+    d.sort_unstable();
+    d.dedup();
+    d.len()
+}
+
+/// What [`split_edges`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Split {
+    /// Vertices inserted into edges.
+    pub inserted: usize,
+    /// Edges split.
+    pub edges: usize,
+    /// Passes made (the later ones check only the edges the previous one made).
+    pub passes: usize,
+}
+
+/// The vertices of `index` that lie within `eps` of the interior of edge `e`
+/// (farther than `eps` from both ends), still used by a face, in order from
+/// `e.v[0]` to `e.v[1]`.
+fn vertices_on_edge(mesh: &Mesh, index: &Points, e: EdgeId, eps: f64) -> Vec<VertexId> {
+    let ed = mesh.edge(e);
+    let (a, b) = (mesh.pos(ed.v[0]), mesh.pos(ed.v[1]));
+    let mut on: Vec<(f64, VertexId)> = Vec::new();
+    for id in index.along(a, b, eps) {
+        let v = VertexId(id);
+        if v == ed.v[0] || v == ed.v[1] || mesh.vertex_edges(v).is_empty() {
+            continue;
+        }
+        let p = mesh.pos(v);
+        if p.distance(a) <= eps || p.distance(b) <= eps {
+            continue;
+        }
+        let (d, t) = point_segment_distance(p, a, b);
+        if d <= eps {
+            on.push((t, v));
+        }
+    }
+    on.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+    on.into_iter().map(|(_, v)| v).collect()
+}
+
+/// Step 2: inserts every vertex of a sound face (see [`degeneracy`]) that
+/// lies within `eps` of the interior of an edge of a sound face into that
+/// edge, in every face that uses the edge, several along one edge in order.
+/// Each face is rewritten once per pass; later passes check only the edges
+/// the previous one created (a vertex inserted slightly off the line can
+/// bring another within reach), until nothing changes.
+pub fn split_edges(mesh: &mut Mesh, eps: f64) -> Split {
+    let faces: Vec<FaceId> = mesh.faces().collect();
+    let mut sound = vec![false; mesh.model().faces.len()];
+    for &f in &faces {
+        sound[f.idx()] = degeneracy(mesh, f, eps).is_none();
+    }
+    let mut verts: Vec<VertexId> = faces
+        .iter()
+        .filter(|f| sound[f.idx()])
+        .flat_map(|&f| mesh.face(f).contours.iter().flatten().copied())
+        .collect();
+    verts.sort_unstable();
+    verts.dedup();
+    let index = Points::new(mesh, &verts);
+    let uses_sound = |mesh: &Mesh, e: EdgeId| {
+        mesh.edge(e)
+            .uses
+            .iter()
+            .any(|u| sound.get(u.face.idx()).copied().unwrap_or(false))
+    };
+    let mut work: Vec<EdgeId> = mesh.edges().filter(|&e| uses_sound(mesh, e)).collect();
+    let mut st = Split::default();
+    while !work.is_empty() && st.passes < MAX_SPLIT_PASSES {
+        st.passes += 1;
+        let mut plan: FxHashMap<EdgeId, Vec<VertexId>> = FxHashMap::default(); // lookup only
+        let mut touched: Vec<FaceId> = Vec::new();
+        for &e in &work {
+            if !mesh.is_edge_live(e) {
+                continue;
+            }
+            let on = vertices_on_edge(mesh, &index, e, eps);
+            if on.is_empty() {
+                continue;
+            }
+            st.inserted += on.len();
+            st.edges += 1;
+            touched.extend(mesh.edge(e).faces());
+            plan.insert(e, on);
+        }
+        if plan.is_empty() {
+            break;
+        }
+        touched.sort_unstable();
+        touched.dedup();
+        let newest = mesh.edges().map(|e| e.0).max().unwrap_or(0);
+        for &f in &touched {
+            let face = mesh.face(f);
+            let contours: Vec<Vec<VertexId>> = face
+                .contours
+                .iter()
+                .enumerate()
+                .map(|(ci, c)| {
+                    let es = mesh.contour_edges(f, ci);
+                    let mut out = Vec::with_capacity(c.len() + 2);
+                    for (i, &v) in c.iter().enumerate() {
+                        out.push(v);
+                        if let Some(list) = plan.get(&es[i]) {
+                            if v == mesh.edge(es[i]).v[0] {
+                                out.extend(list.iter().copied());
+                            } else {
+                                out.extend(list.iter().rev().copied());
+                            }
+                        }
+                    }
+                    out
+                })
+                .collect();
+            mesh.set_face_contours(f, contours);
+        }
+        work = touched
+            .iter()
+            .filter(|&&f| mesh.is_face_live(f))
+            .flat_map(|&f| mesh.face_edges(f))
+            .filter(|&e| e.0 > newest && uses_sound(mesh, e))
+            .collect();
+        work.sort_unstable();
+        work.dedup();
+    }
+    st
+}
+
+/// What [`merge_faces`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Join {
+    /// Joined faces (groups of two or more input faces).
+    pub groups: usize,
+    /// Faces joined into an earlier one (removed).
+    pub joined: usize,
+    /// Holes and islands of the joined faces.
+    pub holes: usize,
+    /// Collinear boundary vertices dropped.
+    pub collinear: usize,
+}
+
+/// An edge two different faces walk in opposite directions, used by nothing else.
+fn is_seam(mesh: &Mesh, e: EdgeId) -> bool {
+    let u = &mesh.edge(e).uses;
+    u.len() == 2 && u[0].face != u[1].face && u[0].forward != u[1].forward
+}
+
+/// The plane of a sound face all of whose vertices lie within `eps` of it.
+fn flat_plane(mesh: &Mesh, f: FaceId, eps: f64) -> Option<Plane> {
+    if degeneracy(mesh, f, eps).is_some() {
+        return None;
+    }
+    let pl = mesh.face_plane(f)?;
+    within(mesh, f, &pl, eps).then_some(pl)
+}
+
+/// Whether every vertex of `f` lies within `eps` of `pl`.
+fn within(mesh: &Mesh, f: FaceId, pl: &Plane, eps: f64) -> bool {
+    mesh.face(f)
+        .contours
+        .iter()
+        .flatten()
+        .all(|&v| pl.dist(mesh.pos(v)).abs() <= eps)
+}
+
+/// Step 3: joins coplanar faces of the same material that share edges.
+///
+/// Faces are taken in statement order; each face not yet in a group starts
+/// one (its *seed*) and the group grows across seams (edges used by exactly
+/// two faces walking them in opposite directions, so facing the same way) to
+/// faces that have the seed's material, a normal within `angle_deg` degrees
+/// of the seed's, all vertices within `eps` of the seed's plane and the
+/// seed's vertices within `eps` of theirs. A face sharing any other edge with
+/// the group (a non-manifold edge: three walls along one line) is not taken,
+/// so no edge another face uses disappears inside a joined face. When the
+/// joined face would leave inside it a vertex that a face outside the group
+/// uses (a pyramid's apex on a floor), the group's faces around that vertex
+/// join nothing and the group grows again without them.
+///
+/// Each group's boundary is traced into contours (outer counter-clockwise
+/// seen from the front, holes clockwise); the seed keeps them, its name and
+/// place, the other faces are removed. Vertices left between two collinear
+/// edges of a joined face (within `eps`), used by nothing else, are dropped
+/// when the new edge would not pass through another vertex.
+pub fn merge_faces(mesh: &mut Mesh, eps: f64, angle_deg: f64) -> Join {
+    const NONE: u32 = u32::MAX;
+    let faces: Vec<FaceId> = mesh.faces().collect();
+    let nf = mesh.model().faces.len();
+    let mut rank = vec![u32::MAX; nf];
+    for (k, &f) in faces.iter().enumerate() {
+        rank[f.idx()] = k as u32;
+    }
+    let cos_tol = angle_deg.clamp(0.0, 180.0).to_radians().cos();
+    let mut planes: Vec<Option<Plane>> = vec![None; nf];
+    for &f in &faces {
+        planes[f.idx()] = flat_plane(mesh, f, eps);
+    }
+    let mut group = vec![NONE; nf];
+    let mut excluded = vec![false; nf];
+    let mut next_gid = 0u32;
+    let mut groups: Vec<(Vec<FaceId>, Vec<Vec<VertexId>>)> = Vec::new();
+    let grow = Grow {
+        planes: &planes,
+        rank: &rank,
+        eps,
+        cos_tol,
+    };
+    for &s in &faces {
+        if group[s.idx()] != NONE || planes[s.idx()].is_none() || excluded[s.idx()] {
+            continue;
+        }
+        loop {
+            let gid = next_gid;
+            next_gid += 1;
+            let members = grow.group(mesh, s, gid, &mut group, &excluded);
+            if members.len() < 2 {
+                break;
+            }
+            let n = planes[s.idx()].expect("seeds are flat").n;
+            let in_group = |f: FaceId| group[f.idx()] == gid;
+            let Some(contours) = trace_group(mesh, &members, n, &in_group) else {
+                break; // left as they are
+            };
+            let bad = swallowing(mesh, &members, &contours, &in_group);
+            if bad.is_empty() {
+                groups.push((members, contours));
+                break;
+            }
+            // Keep vertices that other faces use on a boundary: the faces
+            // around them join nothing; grow again without them.
+            for f in &members {
+                group[f.idx()] = NONE;
+            }
+            for f in bad {
+                excluded[f.idx()] = true;
+            }
+            if excluded[s.idx()] {
+                break;
+            }
+        }
+    }
+
+    let mut st = Join::default();
+    let mut joined_faces = Vec::new();
+    for (members, contours) in groups {
+        let seed = members[0];
+        for &g in &members[1..] {
+            mesh.remove_face(g);
+        }
+        st.holes += contours.len() - 1;
+        mesh.set_face_contours(seed, contours);
+        st.groups += 1;
+        st.joined += members.len() - 1;
+        joined_faces.push(seed);
+    }
+
+    if !joined_faces.is_empty() {
+        let used: Vec<VertexId> = mesh
+            .vertices()
+            .filter(|&v| !mesh.vertex_edges(v).is_empty())
+            .collect();
+        let index = Points::new(mesh, &used);
+        let in_wire: FxHashSet<VertexId> = mesh
+            .model()
+            .wires
+            .iter()
+            .flat_map(|w| w.polylines.iter().flatten().copied())
+            .collect();
+        for &f in &joined_faces {
+            st.collinear += drop_collinear(mesh, f, eps, &index, &in_wire);
+        }
+    }
+    st
+}
+
+/// What growing a group needs to know.
+struct Grow<'a> {
+    planes: &'a [Option<Plane>],
+    rank: &'a [u32],
+    eps: f64,
+    cos_tol: f64,
+}
+
+impl Grow<'_> {
+    /// Grows group `gid` from seed `s` across seams to joinable faces that
+    /// are in no group and not excluded; returns its faces in statement order.
+    fn group(
+        &self,
+        mesh: &Mesh,
+        s: FaceId,
+        gid: u32,
+        group: &mut [u32],
+        excluded: &[bool],
+    ) -> Vec<FaceId> {
+        const NONE: u32 = u32::MAX;
+        let ps = self.planes[s.idx()].expect("seeds are flat");
+        group[s.idx()] = gid;
+        let mut members = vec![s];
+        let mut qi = 0;
+        while qi < members.len() {
+            let f = members[qi];
+            qi += 1;
+            for e in mesh.face_edges(f) {
+                if !is_seam(mesh, e) {
+                    continue;
+                }
+                let u = &mesh.edge(e).uses;
+                let g = if u[0].face == f { u[1].face } else { u[0].face };
+                if group[g.idx()] != NONE || excluded[g.idx()] {
+                    continue;
+                }
+                let Some(pg) = self.planes[g.idx()] else {
+                    continue;
+                };
+                let joinable = mesh.face(g).material == mesh.face(s).material
+                    && ps.n.dot(pg.n) >= self.cos_tol
+                    && within(mesh, g, &ps, self.eps)
+                    && within(mesh, s, &pg, self.eps)
+                    && !mesh.face_edges(g).into_iter().any(|e2| {
+                        !is_seam(mesh, e2)
+                            && mesh
+                                .edge(e2)
+                                .uses
+                                .iter()
+                                .any(|u| u.face != g && group[u.face.idx()] == gid)
+                    });
+                if joinable {
+                    group[g.idx()] = gid;
+                    members.push(g);
+                }
+            }
+        }
+        members.sort_by_key(|f| self.rank[f.idx()]);
+        members
+    }
+}
+
+/// The faces of a group that use a vertex the joined contours would leave
+/// inside the joined face although a face outside the group uses it (say
+/// the apex of a pyramid standing on a floor: swallowed, it would make the
+/// pair intersect). Sorted, without repeats.
+fn swallowing(
+    mesh: &Mesh,
+    members: &[FaceId],
+    contours: &[Vec<VertexId>],
+    in_group: &dyn Fn(FaceId) -> bool,
+) -> Vec<FaceId> {
+    let kept: FxHashSet<VertexId> = contours.iter().flatten().copied().collect(); // lookup only
+    let mut bad = Vec::new();
+    for &f in members {
+        for &v in mesh.face(f).contours.iter().flatten() {
+            if kept.contains(&v) {
+                continue;
+            }
+            let fs = mesh.vertex_faces(v);
+            if fs.iter().any(|&g| !in_group(g)) {
+                bad.extend(fs.into_iter().filter(|&g| in_group(g)));
+            }
+        }
+    }
+    bad.sort_unstable();
+    bad.dedup();
+    bad
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Half {
+    from: VertexId,
+    to: VertexId,
+    /// (member, contour, index): the deterministic order of half-edges.
+    key: (u32, u32, u32),
+}
+
+/// Clockwise angle from `r` to `d`, in (0, 2π]; 2π for the same direction.
+fn cw_angle(r: DVec2, d: DVec2) -> f64 {
+    let cw = -r.perp_dot(d).atan2(r.dot(d));
+    if cw <= 0.0 {
+        cw + std::f64::consts::TAU
+    } else {
+        cw
+    }
+}
+
+/// The contours of the union of a group of faces: the half-edges of all
+/// their contours less the seams inside the group, paired at each vertex
+/// turning as far left as possible (in the plane of normal `n`, so traced
+/// contours never cross), followed into loops, split where a loop visits a
+/// vertex twice. The loop with the largest area along `n` comes first; the
+/// others follow in the order of their first half-edge. `None` when the
+/// boundary does not close or nothing with area is left.
+fn trace_group(
+    mesh: &Mesh,
+    members: &[FaceId],
+    n: DVec3,
+    in_group: &dyn Fn(FaceId) -> bool,
+) -> Option<Vec<Vec<VertexId>>> {
+    let mut halves: Vec<Half> = Vec::new();
+    for (mi, &f) in members.iter().enumerate() {
+        for (ci, c) in mesh.face(f).contours.iter().enumerate() {
+            let es = mesh.contour_edges(f, ci);
+            let k = c.len();
+            for i in 0..k {
+                let e = es[i];
+                if is_seam(mesh, e) && mesh.edge(e).uses.iter().all(|u| in_group(u.face)) {
+                    continue;
+                }
+                halves.push(Half {
+                    from: c[i],
+                    to: c[(i + 1) % k],
+                    key: (mi as u32, ci as u32, i as u32),
+                });
+            }
+        }
+    }
+    if halves.is_empty() {
+        return None;
+    }
+    let frame = Frame::new(mesh.pos(halves[0].from), n);
+    let p2 = |v: VertexId| frame.to_2d(mesh.pos(v));
+
+    // Pair incoming with outgoing half-edges at each vertex.
+    let mut incoming: Vec<(VertexId, usize)> =
+        halves.iter().enumerate().map(|(i, h)| (h.to, i)).collect();
+    let mut outgoing: Vec<(VertexId, usize)> = halves
+        .iter()
+        .enumerate()
+        .map(|(i, h)| (h.from, i))
+        .collect();
+    incoming.sort_unstable();
+    outgoing.sort_unstable();
+    let mut next = vec![usize::MAX; halves.len()];
+    let (mut a, mut b) = (0, 0);
+    while a < incoming.len() {
+        let v = incoming[a].0;
+        let a_end = a + incoming[a..].iter().take_while(|x| x.0 == v).count();
+        if b >= outgoing.len() || outgoing[b].0 != v {
+            return None;
+        }
+        let b_end = b + outgoing[b..].iter().take_while(|x| x.0 == v).count();
+        let (ins, outs) = (&incoming[a..a_end], &outgoing[b..b_end]);
+        if ins.len() != outs.len() {
+            return None;
+        }
+        if ins.len() == 1 {
+            next[ins[0].1] = outs[0].1;
+        } else {
+            let pv = p2(v);
+            let mut used = vec![false; outs.len()];
+            for &(_, hi) in ins {
+                let r = p2(halves[hi].from) - pv;
+                let mut best: Option<(f64, bool, usize)> = None;
+                for (k, &(_, ho)) in outs.iter().enumerate() {
+                    if used[k] {
+                        continue;
+                    }
+                    let d = p2(halves[ho].to) - pv;
+                    let cand = (cw_angle(r, d), halves[ho].to == halves[hi].from, k);
+                    let better = best.is_none_or(|bb| {
+                        cand.0
+                            .total_cmp(&bb.0)
+                            .then(cand.1.cmp(&bb.1))
+                            .then(halves[outs[cand.2].1].key.cmp(&halves[outs[bb.2].1].key))
+                            .is_lt()
+                    });
+                    if better {
+                        best = Some(cand);
+                    }
+                }
+                let k = best?.2;
+                used[k] = true;
+                next[hi] = outs[k].1;
+            }
+        }
+        a = a_end;
+        b = b_end;
+    }
+    if b != outgoing.len() {
+        return None;
+    }
+
+    // Follow the pairing into loops; split loops at repeated vertices.
+    let mut visited = vec![false; halves.len()];
+    let mut loops: Vec<Vec<usize>> = Vec::new();
+    for start in 0..halves.len() {
+        if visited[start] {
+            continue;
+        }
+        let mut lp = Vec::new();
+        let mut h = start;
+        while !visited[h] {
+            visited[h] = true;
+            lp.push(h);
+            h = next[h];
+        }
+        split_loop(&halves, lp, &mut loops);
+    }
+    loops.retain(|lp| lp.len() >= 3);
+    for lp in &mut loops {
+        let k = (0..lp.len()).min_by_key(|&i| halves[lp[i]].key)?;
+        lp.rotate_left(k);
+    }
+    loops.sort_by_key(|lp| halves[lp[0]].key);
+    let contours: Vec<Vec<VertexId>> = loops
+        .iter()
+        .map(|lp| lp.iter().map(|&h| halves[h].from).collect())
+        .collect();
+    let areas: Vec<f64> = contours
+        .iter()
+        .map(|c| {
+            let pts: Vec<DVec3> = c.iter().map(|&v| mesh.pos(v)).collect();
+            newell_normal(&pts).dot(n) / 2.0
+        })
+        .collect();
+    let mut outer: Option<usize> = None;
+    for (i, &ar) in areas.iter().enumerate() {
+        if ar > 0.0 && outer.is_none_or(|o| ar > areas[o]) {
+            outer = Some(i);
+        }
+    }
+    let outer = outer?;
+    let mut rest = contours;
+    let mut result = vec![rest.remove(outer)];
+    result.extend(rest);
+    Some(result)
+}
+
+/// Splits a closed loop of half-edges into loops that visit each vertex once.
+fn split_loop(halves: &[Half], lp: Vec<usize>, out: &mut Vec<Vec<usize>>) {
+    let mut stack: Vec<usize> = Vec::with_capacity(lp.len());
+    let mut at: FxHashMap<VertexId, usize> = FxHashMap::default(); // lookup only
+    for h in lp {
+        let v = halves[h].from;
+        if let Some(&p) = at.get(&v) {
+            let sub = stack.split_off(p);
+            for &x in &sub {
+                at.remove(&halves[x].from);
+            }
+            out.push(sub);
+        }
+        at.insert(v, stack.len());
+        stack.push(h);
+    }
+    if !stack.is_empty() {
+        out.push(stack);
+    }
+}
+
+/// Drops, from every contour of face `f`, vertices that only `f` uses (two
+/// edges, one use each, no wire) and that lie within `eps` of the segment
+/// joining their kept neighbours, together with the others dropped between
+/// the same two. A drop is refused when the new edge exists already or
+/// would pass within `eps` of another vertex in use (which would make a
+/// T-vertex). Returns the number of vertices dropped.
+fn drop_collinear(
+    mesh: &mut Mesh,
+    f: FaceId,
+    eps: f64,
+    index: &Points,
+    in_wire: &FxHashSet<VertexId>,
+) -> usize {
+    if !mesh.is_face_live(f) {
+        return 0;
+    }
+    let only_here = |mesh: &Mesh, v: VertexId| {
+        let es = mesh.vertex_edges(v);
+        !in_wire.contains(&v)
+            && es.len() == 2
+            && es.iter().all(|&e| {
+                let u = &mesh.edge(e).uses;
+                u.len() == 1 && u[0].face == f
+            })
+    };
+    let between = |w: DVec3, a: DVec3, c: DVec3| {
+        let (d, _) = point_segment_distance(w, a, c);
+        d <= eps && w.distance(a) > eps && w.distance(c) > eps
+    };
+    let mut dropped = 0;
+    let mut contours = mesh.face(f).contours.clone();
+    for c in &mut contours {
+        let k = c.len();
+        // Start at a corner that stays.
+        let Some(s) = (0..k).find(|&i| {
+            let (a, b, d) = (c[(i + k - 1) % k], c[i], c[(i + 1) % k]);
+            !only_here(mesh, b) || !between(mesh.pos(b), mesh.pos(a), mesh.pos(d))
+        }) else {
+            continue;
+        };
+        c.rotate_left(s);
+        let mut kept: Vec<VertexId> = vec![c[0]];
+        let mut run: Vec<VertexId> = Vec::new();
+        for i in 1..k {
+            let (a, b, d) = (*kept.last().expect("not empty"), c[i], c[(i + 1) % k]);
+            let (pa, pd) = (mesh.pos(a), mesh.pos(d));
+            let ok = only_here(mesh, b)
+                && run.len() < MAX_COLLINEAR_RUN
+                && mesh.edge_between(a, d).is_none()
+                && between(mesh.pos(b), pa, pd)
+                && run.iter().all(|&w| between(mesh.pos(w), pa, pd))
+                && {
+                    !index.along(pa, pd, eps).iter().any(|&id| {
+                        let u = VertexId(id);
+                        u != a
+                            && u != d
+                            && u != b
+                            && !run.contains(&u)
+                            && !mesh.vertex_edges(u).is_empty()
+                            && between(mesh.pos(u), pa, pd)
+                    })
+                };
+            if ok {
+                run.push(b);
+            } else {
+                kept.push(b);
+                run.clear();
+            }
+        }
+        if kept.len() >= 3 && kept.len() < k {
+            dropped += k - kept.len();
+            *c = kept;
+        }
+    }
+    if dropped > 0 {
+        mesh.set_face_contours(f, contours);
+    }
+    dropped
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn mesh(src: &str) -> Mesh {
+        Mesh::from_model(ug::parse(src.as_bytes(), "t").unwrap().model)
+    }
+
+    fn text(mesh: &Mesh) -> String {
+        ug::write_string(&mesh.to_model())
+    }
+
+    fn face_lines(mesh: &Mesh) -> Vec<String> {
+        text(mesh)
+            .lines()
+            .filter(|l| l.starts_with("f "))
+            .map(String::from)
+            .collect()
+    }
+
+    fn run(src: &str, eps: f64) -> (String, Stats) {
+        let m = ug::parse(src.as_bytes(), "t").unwrap().model;
+        let (out, st) = vlmerge(m, &Options::new(eps)).unwrap();
+        (ug::write_string(&out), st)
+    }
+
+    // ---- step 1 -------------------------------------------------------
+
+    #[test]
+    fn near_vertices_merge_into_the_first_in_statement_order() {
+        let mut m = mesh(
+            "v a 0 0 0; v b 1 0 0; v c 1 1 0; v d 0 1 0;\
+             v b2 1.0000001 0 0; v e 2 0 0; v f 2 1 0; v c2 1 1.00000005 0;\
+             f l (a b c d); f r (b2 e f c2);",
+        );
+        let (merged, dropped) = merge_vertices(&mut m, 1e-6);
+        m.validate().unwrap();
+        assert_eq!(merged, 2);
+        assert!(dropped.is_empty());
+        assert_eq!(face_lines(&m), ["f l (a b c d);", "f r (b e f c);"]);
+        assert!(!text(&m).contains("b2"), "merged vertices are removed");
+    }
+
+    #[test]
+    fn merging_is_greedy_and_never_chains_beyond_epsilon() {
+        // a–b within eps, b–c within eps, a–c not: b joins a, c stays.
+        let mut m = mesh(
+            "v a 0 0 0; v b 0.6 0 0; v c 1.2 0 0; v x 5 0 0; v y 5 5 0;\
+             f t1 (a x y); f t2 (b x y); f t3 (c y x);",
+        );
+        let (merged, _) = merge_vertices(&mut m, 1.0);
+        m.validate().unwrap();
+        assert_eq!(merged, 1);
+        let t = text(&m);
+        assert!(t.contains("v c "), "{t}");
+        assert!(!t.contains("v b "), "{t}");
+    }
+
+    #[test]
+    fn faces_that_collapse_are_dropped_and_reported() {
+        let mut m = mesh(
+            "v a 0 0 0; v b 4 0 0; v c 4 3 0; v d 0 3 0;\
+             v a2 0 1e-9 0; v b2 4 1e-9 0;\
+             f wall (a b c d); f sliver (a b b2 a2); f tri (a b2 c);",
+        );
+        let (merged, dropped) = merge_vertices(&mut m, 1e-6);
+        m.validate().unwrap();
+        assert_eq!(merged, 2);
+        assert_eq!(dropped.len(), 1);
+        assert_eq!(m.face(dropped[0].0).name, Some("sliver".into()));
+        assert!(dropped[0].1.contains("fewer than 3"), "{:?}", dropped);
+        assert_eq!(face_lines(&m), ["f wall (a b c d);", "f tri (a b c);"]);
+    }
+
+    #[test]
+    fn zero_area_faces_are_dropped_after_merging() {
+        // Collinear but distinct vertices: no merge, still no area.
+        let mut m = mesh(
+            "v a 0 0 0; v b 4 0 0; v c 4 3 0; v m 2 0 0;\
+             f t (a b c); f flat (a m b);",
+        );
+        let (_, dropped) = merge_vertices(&mut m, 1e-6);
+        m.validate().unwrap();
+        assert_eq!(dropped.len(), 1);
+        assert!(dropped[0].1.contains("zero area"));
+        assert_eq!(m.num_faces(), 1);
+    }
+
+    #[test]
+    fn wires_follow_merged_vertices() {
+        let mut m = mesh(
+            "v a 0 0 0; v b 1 0 0; v c 0 1 0; v a2 1e-9 0 0;\
+             f t (a b c); w wire (a2 b);",
+        );
+        merge_vertices(&mut m, 1e-6);
+        m.validate().unwrap();
+        let t = text(&m);
+        assert!(t.contains("w wire (a b);"), "{t}");
+        assert!(!t.contains("a2"), "{t}");
+    }
+
+    // ---- step 2 -------------------------------------------------------
+
+    #[test]
+    fn t_vertex_is_inserted_into_the_edge() {
+        // Figure 3: the big face walks A–E; C lies on that edge.
+        let mut m = mesh(
+            "v a 0 0 0; v c 1 0 0; v e 2 0 0; v t 2 -1 0; v u 0 -1 0;\
+             v p 0 1 0; v q 1 1 0; v r 2 1 0;\
+             f big (u t e a); f l (a c q p); f r (c e r q);",
+        );
+        let s = split_edges(&mut m, 1e-6);
+        m.validate().unwrap();
+        assert_eq!((s.inserted, s.edges), (1, 1));
+        assert_eq!(face_lines(&m)[0], "f big (u t e c a);");
+        assert!(m.edge_between(VertexId(0), VertexId(2)).is_none());
+    }
+
+    #[test]
+    fn several_t_vertices_along_one_edge_go_in_order_in_every_face() {
+        let mut m = mesh(
+            "v a 0 0 0; v b 10 0 0; v c 10 -1 0; v d 0 -1 0;\
+             v p 0 1 0; v q 10 1 0;\
+             v m7 7 0 0; v m2 2 0 0; v m5 5 0 0;\
+             f low (d c b a); f up (a b q p);\
+             f t1 (m2 m5 q); f t2 (m5 m7 q);",
+        );
+        let s = split_edges(&mut m, 1e-6);
+        m.validate().unwrap();
+        assert_eq!((s.inserted, s.edges), (3, 1), "{s:?}");
+        let f = face_lines(&m);
+        assert_eq!(f[0], "f low (d c b m7 m5 m2 a);");
+        assert_eq!(f[1], "f up (a m2 m5 m7 b q p);");
+    }
+
+    #[test]
+    fn vertices_of_degenerate_faces_are_not_t_vertices() {
+        let mut m = mesh(
+            "v a 0 0 0; v b 4 0 0; v c 4 3 0; v m 2 0 0; v n 3 0 0;\
+             f t (a b c); f flat (m n a);",
+        );
+        let s = split_edges(&mut m, 1e-6);
+        assert_eq!(s.inserted, 0);
+    }
+
+    #[test]
+    fn splitting_a_clean_mesh_changes_nothing() {
+        let src = "v a 0 0 0; v b 1 0 0; v c 1 1 0; v d 0 1 0; v e 2 0 0; v f 2 1 0;\
+                   f l (a b c d); f r (b e f c);";
+        let mut m = mesh(src);
+        let before = text(&m);
+        assert_eq!(split_edges(&mut m, 1e-6).inserted, 0);
+        assert_eq!(text(&m), before);
+    }
+
+    // ---- step 3 -------------------------------------------------------
+
+    /// A 6×3 wall in the x–z plane (front towards −y) around a 2×1 window
+    /// at x 2..4, z 1..2, as 8 quads (outer CCW seen from −y).
+    const WALL8: &str = "c_rgb w 0.8 0.8 0.8;\
+        v p00 0 0 0; v p10 2 0 0; v p20 4 0 0; v p30 6 0 0;\
+        v p01 0 0 1; v p11 2 0 1; v p21 4 0 1; v p31 6 0 1;\
+        v p02 0 0 2; v p12 2 0 2; v p22 4 0 2; v p32 6 0 2;\
+        v p03 0 0 3; v p13 2 0 3; v p23 4 0 3; v p33 6 0 3;\
+        f w1 (p00 p10 p11 p01) w; f w2 (p10 p20 p21 p11) w; f w3 (p20 p30 p31 p21) w;\
+        f w4 (p01 p11 p12 p02) w; f w6 (p21 p31 p32 p22) w;\
+        f w7 (p02 p12 p13 p03) w; f w8 (p12 p22 p23 p13) w; f w9 (p22 p32 p33 p23) w;";
+
+    #[test]
+    fn wall_around_a_window_becomes_one_face_with_one_hole() {
+        let mut m = mesh(WALL8);
+        let j = merge_faces(&mut m, 1e-6, DEFAULT_ANGLE);
+        m.validate().unwrap();
+        assert_eq!((j.groups, j.joined, j.holes), (1, 7, 1));
+        let f = m.faces().next().unwrap();
+        assert_eq!(m.face(f).name.as_deref(), Some("w1"));
+        let c = &m.face(f).contours;
+        assert_eq!(c.len(), 2);
+        assert_eq!(c[0].len(), 4, "collinear boundary vertices dropped: {c:?}");
+        assert_eq!(c[1].len(), 4);
+        // Outer CCW and hole CW seen from the front (−y).
+        let pts = m.face_points(f);
+        let front = DVec3::new(0.0, -1.0, 0.0);
+        assert!(newell_normal(&pts[0]).dot(front) > 0.0);
+        assert!(newell_normal(&pts[1]).dot(front) < 0.0);
+        assert!((m.face_area(f) - 16.0).abs() < 1e-12);
+        assert_eq!(
+            face_lines(&m),
+            ["f w1 (p00 p30 p33 p03) (p21 p11 p12 p22) w;"]
+        );
+    }
+
+    #[test]
+    fn joining_is_deterministic_and_keeps_the_first_face() {
+        // Same wall, statements in another order: the first statement names the result.
+        let src = WALL8.replace("f w1 (p00 p10 p11 p01) w;", "") + "f w1 (p00 p10 p11 p01) w;";
+        let mut m = mesh(&src);
+        merge_faces(&mut m, 1e-6, DEFAULT_ANGLE);
+        m.validate().unwrap();
+        let lines = face_lines(&m);
+        assert_eq!(lines.len(), 1);
+        assert!(lines[0].starts_with("f w2 "), "{lines:?}");
+        let mut again = mesh(&src);
+        merge_faces(&mut again, 1e-6, DEFAULT_ANGLE);
+        assert_eq!(text(&again), text(&m));
+    }
+
+    #[test]
+    fn different_materials_orientations_and_planes_stay_apart() {
+        let base = "c_rgb a 1 0 0; c_rgb b 0 1 0;\
+                    v p 0 0 0; v q 1 0 0; v r 1 1 0; v s 0 1 0; v t 2 0 0; v u 2 1 0;";
+        // Different material.
+        let mut m = mesh(&format!("{base} f x (p q r s) a; f y (q t u r) b;"));
+        assert_eq!(merge_faces(&mut m, 1e-6, DEFAULT_ANGLE).joined, 0);
+        // Facing the other way (the shared edge walked the same way).
+        let mut m = mesh(&format!("{base} f x (p q r s) a; f y (q r u t) a;"));
+        assert_eq!(merge_faces(&mut m, 1e-6, DEFAULT_ANGLE).joined, 0);
+        // Folded by 2 degrees.
+        let z = 1.0f64 * 2f64.to_radians().tan();
+        let folded = format!(
+            "c_rgb a 1 0 0; v p 0 0 0; v q 1 0 0; v r 1 1 0; v s 0 1 0; v t 2 0 {z}; v u 2 1 {z};\
+             f x (p q r s) a; f y (q t u r) a;"
+        );
+        let mut m = mesh(&folded);
+        assert_eq!(merge_faces(&mut m, 1e-6, DEFAULT_ANGLE).joined, 0);
+        // …but joined with a looser angle and epsilon.
+        let mut m = mesh(&folded);
+        assert_eq!(merge_faces(&mut m, 0.1, 5.0).joined, 1);
+        m.validate().unwrap();
+        // Same material and plane: joined, keeping the collinear vertices
+        // that are corners (here none is left between collinear edges).
+        let mut m = mesh(&format!("{base} f x (p q r s) a; f y (q t u r) a;"));
+        assert_eq!(merge_faces(&mut m, 1e-6, DEFAULT_ANGLE).joined, 1);
+        m.validate().unwrap();
+        assert_eq!(face_lines(&m), ["f x (p t u s) a;"]);
+    }
+
+    #[test]
+    fn non_manifold_edges_are_not_joined_across() {
+        // Walls x and y are coplanar and meet at the edge q–r, which a third
+        // wall z also uses (a T in plan).
+        let mut m = mesh(
+            "v p 0 0 0; v q 1 0 0; v t 2 0 0; v p1 0 0 1; v q1 1 0 1; v t1 2 0 1;\
+             v z0 1 1 0; v z1 1 1 1;\
+             f x (p q q1 p1); f y (q t t1 q1); f z (q z0 z1 q1);",
+        );
+        assert_eq!(merge_faces(&mut m, 1e-6, DEFAULT_ANGLE).joined, 0);
+        m.validate().unwrap();
+        assert_eq!(m.num_faces(), 3);
+    }
+
+    #[test]
+    fn boundary_vertices_used_elsewhere_stay() {
+        // Two floor quads joined; the middle vertices carry a wall: kept.
+        let mut m = mesh(
+            "v a 0 0 0; v b 1 0 0; v c 2 0 0; v d 2 1 0; v e 1 1 0; v f 0 1 0;\
+             v b1 1 0 1; v e1 1 1 1; v g 1 -1 0; v g1 1 -1 1;\
+             f l (a b e f); f r (b c d e); f wall (g b b1 g1);",
+        );
+        let j = merge_faces(&mut m, 1e-6, DEFAULT_ANGLE);
+        m.validate().unwrap();
+        assert_eq!((j.joined, j.collinear), (1, 1));
+        assert_eq!(face_lines(&m)[0], "f l (a b c d f);");
+    }
+
+    #[test]
+    fn floor_of_quads_merges_and_the_rug_stays() {
+        let mut src = String::from("c_rgb floor 0.5 0.5 0.5; c_rgb rug 0.8 0.1 0.1;");
+        for i in 0..=3 {
+            for j in 0..=3 {
+                src += &format!("v g{i}{j} {i} {j} 0;");
+            }
+        }
+        for i in 0..3 {
+            for j in 0..3 {
+                src += &format!(
+                    "f q{i}{j} (g{i}{j} g{}{j} g{}{} g{i}{}) floor;",
+                    i + 1,
+                    i + 1,
+                    j + 1,
+                    j + 1
+                );
+            }
+        }
+        src += "v r0 1.2 1.2 0.001; v r1 1.8 1.2 0.001; v r2 1.8 1.8 0.001; v r3 1.2 1.8 0.001;\
+                f rug (r0 r1 r2 r3) rug;";
+        let mut m = mesh(&src);
+        let j = merge_faces(&mut m, 1e-6, DEFAULT_ANGLE);
+        m.validate().unwrap();
+        assert_eq!((j.groups, j.joined, j.holes), (1, 8, 0));
+        assert_eq!(
+            face_lines(&m),
+            ["f q00 (g00 g30 g33 g03) floor;", "f rug (r0 r1 r2 r3) rug;"]
+        );
+    }
+
+    #[test]
+    fn vertices_other_faces_use_are_not_swallowed() {
+        // A 3×3 floor; a triangle stands on it touching only the inner grid
+        // vertex g11. The four quads around g11 join nothing (joined, g11
+        // would lie inside the floor: the triangle would intersect it); the
+        // other five join into one face.
+        let mut src = String::new();
+        for i in 0..=3 {
+            for j in 0..=3 {
+                src += &format!("v g{i}{j} {i} {j} 0;");
+            }
+        }
+        for i in 0..3 {
+            for j in 0..3 {
+                src += &format!(
+                    "f q{i}{j} (g{i}{j} g{}{j} g{}{} g{i}{});",
+                    i + 1,
+                    i + 1,
+                    j + 1,
+                    j + 1
+                );
+            }
+        }
+        src += "v t0 0.5 1 1; v t1 1.5 1 1; f tri (g11 t1 t0);";
+        let mut m = mesh(&src);
+        let j = merge_faces(&mut m, 1e-6, DEFAULT_ANGLE);
+        m.validate().unwrap();
+        assert_eq!((j.groups, j.joined), (1, 4));
+        let names: Vec<String> = m.faces().map(|f| m.face(f).name.clone().unwrap()).collect();
+        assert_eq!(names, ["q00", "q01", "q02", "q10", "q11", "tri"]);
+        let g11 = VertexId(5);
+        assert!(m.vertex_faces(g11).len() == 5);
+        // A second pass changes nothing.
+        let before = text(&m);
+        assert_eq!(merge_faces(&mut m, 1e-6, DEFAULT_ANGLE), Join::default());
+        assert_eq!(text(&m), before);
+        // Without the triangle all nine join.
+        let mut m = mesh(&src.replace("f tri (g11 t1 t0);", ""));
+        assert_eq!(merge_faces(&mut m, 1e-6, DEFAULT_ANGLE).joined, 8);
+    }
+
+    #[test]
+    fn trace_splits_pinched_boundaries() {
+        // A 3×3 block of squares without the centre and the (2, 2) corner:
+        // the hole touches the notch at one vertex, which the union's
+        // boundary visits twice; the traced contours keep it once each.
+        let mut src = String::new();
+        for i in 0..=3 {
+            for j in 0..=3 {
+                src += &format!("v g{i}{j} {i} {j} 0;");
+            }
+        }
+        for i in 0..3 {
+            for j in 0..3 {
+                if (i, j) != (1, 1) && (i, j) != (2, 2) {
+                    src += &format!(
+                        "f q{i}{j} (g{i}{j} g{}{j} g{}{} g{i}{});",
+                        i + 1,
+                        i + 1,
+                        j + 1,
+                        j + 1
+                    );
+                }
+            }
+        }
+        let mut m = mesh(&src);
+        let j = merge_faces(&mut m, 1e-6, DEFAULT_ANGLE);
+        m.validate().unwrap();
+        assert_eq!((j.groups, j.joined, j.holes), (1, 6, 1));
+        let f = m.faces().next().unwrap();
+        assert!((m.face_area(f) - 7.0).abs() < 1e-12);
+        let c = &m.face(f).contours;
+        assert_eq!(c[1].len(), 4, "the hole: {c:?}");
+        let g22 = VertexId(10);
+        assert!(
+            c.iter()
+                .all(|c| c.iter().filter(|&&v| v == g22).count() == 1)
+        );
+    }
+
+    // ---- all together -------------------------------------------------
+
+    #[test]
+    fn wall_of_four_quads_with_defects_becomes_one_face_with_one_hole() {
+        // Left and right strips, a lintel and a sill; the strips' inner edges
+        // carry the window corners as T-vertices; the lintel's vertices are
+        // duplicated with tiny offsets.
+        let src = "c_rgb w 0.8 0.8 0.8;\
+            v a 0 0 0; v b 2 0 0; v c 2 0 3; v d 0 0 3;\
+            v e 4 0 0; v f 6 0 0; v g 6 0 3; v h 4 0 3;\
+            v s0 2 0 1; v s1 4 0 1; v t0 2.0000000001 0 2; v t1 4 0 2.0000000001;\
+            v c2 2 0 3.0000000001; v h2 3.9999999999 0 3;\
+            f left (a b c d) w; f right (e f g h) w;\
+            f sill (b e s1 s0) w; f lintel (t0 t1 h2 c2) w;";
+        let (out, st) = run(src, 1e-6);
+        assert_eq!(st.vertices_merged, 2);
+        assert_eq!(st.tvertices, 4);
+        assert_eq!((st.groups, st.faces_joined, st.holes), (1, 3, 1));
+        let faces: Vec<&str> = out.lines().filter(|l| l.starts_with("f ")).collect();
+        assert_eq!(faces, ["f left (a f g d) (s0 t0 t1 s1) w;"], "{out}");
+        let m = Mesh::from_model(ug::parse(out.as_bytes(), "o").unwrap().model);
+        m.validate().unwrap();
+        let f = m.faces().next().unwrap();
+        assert!((m.face_area(f) - 16.0).abs() < 1e-8);
+        // A second pass changes nothing.
+        assert_eq!(run(&out, 1e-6).0, out);
+    }
+
+    #[test]
+    fn steps_can_be_disabled() {
+        let src = "v a 0 0 0; v b 1 0 0; v c 1 1 0; v d 0 1 0; v e 2 0 0; v f 2 1 0;\
+                   v b2 1 1e-9 0; f l (a b c d); f r (b2 e f c);";
+        let m = ug::parse(src.as_bytes(), "t").unwrap().model;
+        let opts = Options {
+            merge_vertices: false,
+            split_edges: false,
+            merge_faces: false,
+            ..Options::new(1e-6)
+        };
+        let (out, st) = vlmerge(m.clone(), &opts).unwrap();
+        assert_eq!(out, m);
+        assert_eq!(st.faces_out, 2);
+        let opts = Options {
+            merge_faces: false,
+            ..Options::new(1e-6)
+        };
+        let (out, st) = vlmerge(m.clone(), &opts).unwrap();
+        assert_eq!((st.vertices_merged, st.faces_out), (1, 2));
+        assert_eq!(out.vertices.len(), 6);
+        let (out, st) = vlmerge(m, &Options::new(1e-6)).unwrap();
+        assert_eq!((st.faces_joined, st.faces_out), (1, 1));
+        assert_eq!(
+            ug::write_string(&out).lines().last(),
+            Some("f l (a e f d);")
+        );
+    }
+
+    #[test]
+    fn dropped_faces_are_named_like_ugcheck_names_them() {
+        let src = "v a 0 0 0; v b 1 0 0; v c 1 1 0; v a2 0 1e-9 0;\
+                   f (a b c); f (a b a2); f named (a a2 b);";
+        let (_, st) = run(src, 1e-6);
+        let names: Vec<&str> = st.dropped.iter().map(|d| d.face.as_str()).collect();
+        assert_eq!(names, ["#2", "named"]);
+    }
+}

@@ -1,0 +1,16 @@
+//! Progressive radiosity (Smith 1991, §5–6) over a `libmesh` element mesh.
+//!
+//! Quantities (DESIGN.md §6): `emission_rgb` E is exitance, `diffuse_rgb` ρ is
+//! reflectance; every element vertex holds irradiance H, and radiosity
+//! B = E + ρH. A patch shoots its unshot energy ΔΦ (emitted plus reflected,
+//! measured from its elements' vertex averages, minus what it shot before)
+//! as a uniform unshot radiosity ΔB = ΔΦ/A; a visible vertex v gains
+//! ΔB·F(v), F the exact point-to-polygon form factor of the shooting
+//! element, clipped to v's horizon.
+
+pub mod formfactor;
+pub mod solver;
+pub mod visibility;
+
+pub use solver::{Options, Output, ShotStats, Solver, Stop};
+pub use visibility::{RayVisibility, Visibility};

@@ -1,0 +1,647 @@
+//! The progressive shooting loop, light subdivision for penumbrae (§5.3) and
+//! gradient subdivision with re-shooting at new vertices (§6).
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use glam::DVec3;
+use libmesh::{ElemId, Mesh, PatchId, SurfaceId, VertId};
+use rayon::prelude::*;
+use ug::{Item, Material, MaterialDef, MaterialId, Model};
+
+use crate::formfactor::point_to_polygon;
+use crate::visibility::Visibility;
+
+type Rgb = [f64; 3];
+
+fn add(a: Rgb, b: Rgb) -> Rgb {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+fn scale(a: Rgb, s: f64) -> Rgb {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+fn sum(a: Rgb) -> f64 {
+    a[0] + a[1] + a[2]
+}
+
+/// What the output colours are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Output {
+    /// B = E + ρH (exitance).
+    Radiosity,
+    /// H (incident energy per unit area).
+    Irradiance,
+}
+
+/// Solver settings. Lengths are in model units; `None` means automatic.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Stop when the unshot energy is below this fraction of the emitted energy.
+    pub converge: f64,
+    pub max_shots: Option<usize>,
+    pub time_limit: Option<Duration>,
+    /// Patches chosen per batch (§5.2).
+    pub batch: usize,
+    /// A shooting element carrying more than this fraction of the total
+    /// emitted energy is subdivided for penumbrae (§5.3) …
+    pub penumbra_energy: f64,
+    /// … unless its longest edge is already below this length (auto: half the mean patch edge).
+    pub penumbra_size: Option<f64>,
+    /// Elements whose radiosity differs across an edge by more than this are
+    /// subdivided (§6); auto: a tenth of the scene's expected mean radiosity
+    /// (emitted power per area and channel over 1 − mean reflectance).
+    pub gradient: Option<f64>,
+    /// … unless their longest edge is below this (auto: an eighth of the mean patch edge).
+    pub min_edge: Option<f64>,
+    pub output: Output,
+    /// Add a display ambient term for the energy not yet shot (Cohen et al. 1988).
+    pub ambient: bool,
+    /// Distance below which a receiver is moved in front of the shooter's
+    /// plane (§5.4), as a fraction of the shooter's longest edge.
+    pub offset: f64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            converge: 1e-3,
+            max_shots: None,
+            time_limit: None,
+            batch: 20,
+            penumbra_energy: 0.02,
+            penumbra_size: None,
+            gradient: None,
+            min_edge: None,
+            output: Output::Radiosity,
+            ambient: false,
+            offset: 1e-6,
+        }
+    }
+}
+
+/// Why the solver stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stop {
+    Converged,
+    MaxShots,
+    TimeLimit,
+    Interrupted,
+    /// Nothing emits light.
+    Dark,
+}
+
+/// Statistics of one shot.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ShotStats {
+    pub shot: usize,
+    pub patch: u32,
+    /// Energy shot (sum of channels).
+    pub energy: f64,
+    /// Energy received by the scene's elements from this shot (sum of channels;
+    /// equals `energy` in a closed enclosure up to discretisation).
+    pub received: f64,
+    /// The part of `received` the surfaces reflect (Σ area × ρ × mean corner ΔH):
+    /// what this shot added to the patches' energy.
+    pub reflected: f64,
+    /// Shooting elements after light subdivision.
+    pub shooters: usize,
+    pub vertices_reached: usize,
+    /// Elements split by gradient subdivision after the shot.
+    pub subdivided: usize,
+    pub seconds: f64,
+    /// Unshot energy left, as a fraction of the emitted energy.
+    pub unshot: f64,
+}
+
+/// A progressive radiosity solution in progress.
+pub struct Solver<'v> {
+    pub mesh: Mesh,
+    rho: Vec<Rgb>,
+    emit: Vec<Rgb>,
+    /// Irradiance per vertex.
+    h: Vec<Rgb>,
+    /// This shot's contribution per vertex.
+    dh: Vec<Rgb>,
+    /// Energy already shot per patch.
+    shot: Vec<Rgb>,
+    emitted: f64,
+    vis: &'v dyn Visibility,
+    opts: Options,
+    penumbra_size: f64,
+    gradient: f64,
+    min_edge: f64,
+    pub shots: Vec<ShotStats>,
+}
+
+impl<'v> Solver<'v> {
+    /// Sets up the solution: H = 0 everywhere, B = E.
+    pub fn new(
+        mesh: Mesh,
+        materials: &[Material],
+        vis: &'v dyn Visibility,
+        opts: Options,
+    ) -> Solver<'v> {
+        let ns = mesh.num_surfaces();
+        let mut rho = vec![[0.0; 3]; ns];
+        let mut emit = vec![[0.0; 3]; ns];
+        for s in mesh.surfaces() {
+            if let Some(m) = mesh
+                .surface_material(s)
+                .and_then(|m| materials.get(m.idx()))
+            {
+                rho[s.idx()] = m.diffuse().map(|x| x.clamp(0.0, 1.0));
+                emit[s.idx()] = m.emission();
+            } else {
+                rho[s.idx()] = [0.5; 3]; // faces without a material: mid grey
+            }
+        }
+        let np = mesh.num_patches();
+        let emitted: f64 = mesh
+            .patches()
+            .map(|p| sum(emit[mesh.patch_surface(p).idx()]) * mesh.patch_area(p))
+            .sum();
+        let area: f64 = mesh.patches().map(|p| mesh.patch_area(p)).sum();
+        let mean_edge = if np > 0 {
+            mesh.patches()
+                .map(|p| mesh.elem_longest_edge(mesh.patch_root(p)))
+                .sum::<f64>()
+                / np as f64
+        } else {
+            1.0
+        };
+        let penumbra_size = opts.penumbra_size.unwrap_or(mean_edge / 2.0);
+        // The mean radiosity of a closed scene in equilibrium: emitted power per
+        // area and channel, amplified by the mean interreflection 1/(1 − ρ̄).
+        let rho_mean: f64 = if area > 0.0 {
+            mesh.patches()
+                .map(|p| sum(rho[mesh.patch_surface(p).idx()]) / 3.0 * mesh.patch_area(p))
+                .sum::<f64>()
+                / area
+        } else {
+            0.5
+        };
+        let mean_b = emitted / 3.0 / area.max(f64::MIN_POSITIVE) / (1.0 - rho_mean.min(0.95));
+        let gradient = opts.gradient.unwrap_or(0.1 * mean_b);
+        let min_edge = opts.min_edge.unwrap_or(mean_edge / 8.0);
+        let nv = mesh.num_vertices();
+        Solver {
+            mesh,
+            rho,
+            emit,
+            h: vec![[0.0; 3]; nv],
+            dh: vec![[0.0; 3]; nv],
+            shot: vec![[0.0; 3]; np],
+            emitted,
+            vis,
+            opts,
+            penumbra_size,
+            gradient,
+            min_edge,
+            shots: Vec::new(),
+        }
+    }
+
+    /// The gradient threshold and minimum edge in use.
+    pub fn thresholds(&self) -> (f64, f64, f64) {
+        (self.gradient, self.min_edge, self.penumbra_size)
+    }
+
+    /// Total emitted energy (sum of channels).
+    pub fn emitted(&self) -> f64 {
+        self.emitted
+    }
+
+    /// Radiosity B = E + ρH at a vertex.
+    pub fn radiosity(&self, v: VertId) -> Rgb {
+        let s = self.mesh.vertex_surface(v).idx();
+        let (e, r, h) = (self.emit[s], self.rho[s], self.h[v.idx()]);
+        [e[0] + r[0] * h[0], e[1] + r[1] * h[1], e[2] + r[2] * h[2]]
+    }
+
+    pub fn irradiance(&self, v: VertId) -> Rgb {
+        self.h[v.idx()]
+    }
+
+    /// Total energy of all patches (sum of channels): the emitted energy plus
+    /// everything reflected so far.
+    pub fn total_energy(&self) -> f64 {
+        let e: Vec<f64> = (0..self.mesh.num_patches())
+            .into_par_iter()
+            .map(|p| sum(self.patch_energy(PatchId(p as u32))))
+            .collect();
+        e.iter().sum()
+    }
+
+    /// Energy of a patch (§5.1): Σ over its elements of area × mean corner radiosity.
+    pub fn patch_energy(&self, p: PatchId) -> Rgb {
+        let mut acc = [0.0; 3];
+        for e in self.mesh.patch_leaves(p) {
+            let c = self.mesh.elem_corners(e);
+            let mut b = [0.0; 3];
+            for &v in c {
+                b = add(b, self.radiosity(v));
+            }
+            acc = add(acc, scale(b, self.mesh.elem_area(e) / c.len() as f64));
+        }
+        acc
+    }
+
+    /// Energy a patch has not shot yet (per channel, never negative).
+    pub fn unshot(&self, p: PatchId) -> Rgb {
+        let e = self.patch_energy(p);
+        let s = self.shot[p.idx()];
+        [
+            (e[0] - s[0]).max(0.0),
+            (e[1] - s[1]).max(0.0),
+            (e[2] - s[2]).max(0.0),
+        ]
+    }
+
+    /// Total unshot energy as a fraction of the emitted energy.
+    pub fn unshot_fraction(&self) -> f64 {
+        if self.emitted <= 0.0 {
+            return 0.0;
+        }
+        // Collected, then summed in patch order: the same bits at any thread count.
+        let u: Vec<f64> = (0..self.mesh.num_patches())
+            .into_par_iter()
+            .map(|p| sum(self.unshot(PatchId(p as u32))))
+            .collect();
+        u.iter().sum::<f64>() / self.emitted
+    }
+
+    /// Runs until a stopping rule holds; `progress` is called after every shot.
+    pub fn solve(
+        &mut self,
+        interrupt: Option<Arc<AtomicBool>>,
+        mut progress: impl FnMut(&ShotStats),
+    ) -> Stop {
+        if self.emitted <= 0.0 {
+            return Stop::Dark;
+        }
+        let start = Instant::now();
+        loop {
+            // §5.2: the brightest patches, re-evaluated just before each shot.
+            let np = self.mesh.num_patches();
+            let mut energies: Vec<(f64, u32)> = (0..np)
+                .into_par_iter()
+                .map(|p| (sum(self.unshot(PatchId(p as u32))), p as u32))
+                .collect();
+            let total: f64 = energies.iter().map(|e| e.0).sum();
+            if total <= self.opts.converge * self.emitted {
+                return Stop::Converged;
+            }
+            energies.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+            for &(_, p) in energies.iter().take(self.opts.batch.max(1)) {
+                if let Some(max) = self.opts.max_shots
+                    && self.shots.len() >= max
+                {
+                    return Stop::MaxShots;
+                }
+                if let Some(t) = self.opts.time_limit
+                    && start.elapsed() >= t
+                {
+                    return Stop::TimeLimit;
+                }
+                if interrupt
+                    .as_ref()
+                    .is_some_and(|i| i.load(Ordering::Relaxed))
+                {
+                    return Stop::Interrupted;
+                }
+                let stats = self.shoot(PatchId(p));
+                if let Some(s) = stats {
+                    progress(&s);
+                    if s.unshot <= self.opts.converge {
+                        return Stop::Converged;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Shoots one patch's unshot energy; `None` when it has none.
+    pub fn shoot(&mut self, p: PatchId) -> Option<ShotStats> {
+        let t0 = Instant::now();
+        let d_phi = self.unshot(p);
+        let energy = sum(d_phi);
+        if energy <= 0.0 {
+            return None;
+        }
+        let area = self.mesh.patch_area(p);
+        let d_b = scale(d_phi, 1.0 / area);
+        // §5.3: subdivide the shooter until its pieces are dim or small enough.
+        let limit = self.opts.penumbra_energy * self.emitted;
+        loop {
+            let mut split_any = false;
+            for e in self.mesh.patch_leaves(p) {
+                let share = energy * self.mesh.elem_area(e) / area;
+                if share > limit && self.mesh.elem_longest_edge(e) > self.penumbra_size {
+                    let split = self.mesh.split(e);
+                    if !split.refined.is_empty() {
+                        split_any = true;
+                        self.grow();
+                        for nv in &split.new_vertices {
+                            let (a, b) = (self.h[nv.parents[0].idx()], self.h[nv.parents[1].idx()]);
+                            self.h[nv.v.idx()] = scale(add(a, b), 0.5);
+                        }
+                    }
+                }
+            }
+            if !split_any {
+                break;
+            }
+        }
+        let shooters: Vec<(Vec<DVec3>, DVec3)> = self
+            .mesh
+            .patch_leaves(p)
+            .into_iter()
+            .map(|e| {
+                let poly: Vec<DVec3> = self
+                    .mesh
+                    .elem_corners(e)
+                    .iter()
+                    .map(|&v| self.mesh.vertex_pos(v))
+                    .collect();
+                let c = poly.iter().copied().sum::<DVec3>() / poly.len() as f64;
+                (poly, c)
+            })
+            .collect();
+        let surface = self.mesh.patch_surface(p);
+        let normal = self.mesh.surface_normal(surface);
+        let all: Vec<VertId> = (0..self.mesh.num_vertices())
+            .map(|v| VertId(v as u32))
+            .collect();
+        self.dh.iter_mut().for_each(|d| *d = [0.0; 3]);
+        let reached = self.shoot_at(&all, &shooters, surface, normal, d_b);
+        self.shot[p.idx()] = add(self.shot[p.idx()], d_phi);
+
+        // §6: gradient subdivision, re-shooting this light at the new vertices.
+        let mut subdivided = 0;
+        for _round in 0..32 {
+            let grad = self.gradient;
+            let min_edge = self.min_edge;
+            let candidates: Vec<ElemId> = self.mesh.leaves().collect();
+            let to_split: Vec<ElemId> = candidates
+                .into_par_iter()
+                .filter(|&e| {
+                    let c = self.mesh.elem_corners(e);
+                    if !c.iter().any(|v| sum(self.dh[v.idx()]) > 0.0)
+                        || self.mesh.elem_longest_edge(e) <= min_edge
+                    {
+                        return false;
+                    }
+                    (0..c.len()).any(|i| {
+                        let (a, b) = (self.radiosity(c[i]), self.radiosity(c[(i + 1) % c.len()]));
+                        (0..3).any(|k| (a[k] - b[k]).abs() > grad)
+                    })
+                })
+                .collect();
+            if to_split.is_empty() {
+                break;
+            }
+            let mut fresh: Vec<VertId> = Vec::new();
+            for e in to_split {
+                if !self.mesh.elem_is_leaf(e) {
+                    continue; // already split by balancing
+                }
+                let split = self.mesh.split(e);
+                subdivided += split.refined.len();
+                self.grow();
+                for nv in &split.new_vertices {
+                    // Value before this shot: the mean of the parents' values before it.
+                    let before = |s: &Self, v: VertId| {
+                        let (h, d) = (s.h[v.idx()], s.dh[v.idx()]);
+                        [h[0] - d[0], h[1] - d[1], h[2] - d[2]]
+                    };
+                    let (a, b) = (before(self, nv.parents[0]), before(self, nv.parents[1]));
+                    self.h[nv.v.idx()] = scale(add(a, b), 0.5);
+                    self.dh[nv.v.idx()] = [0.0; 3];
+                    fresh.push(nv.v);
+                }
+            }
+            if fresh.is_empty() {
+                break;
+            }
+            self.shoot_at(&fresh, &shooters, surface, normal, d_b);
+        }
+
+        let (received, reflected) = self.received();
+        let unshot = self.unshot_fraction();
+        let stats = ShotStats {
+            shot: self.shots.len() + 1,
+            patch: p.0,
+            energy,
+            received,
+            reflected,
+            shooters: shooters.len(),
+            vertices_reached: reached,
+            subdivided,
+            seconds: t0.elapsed().as_secs_f64(),
+            unshot,
+        };
+        self.shots.push(stats.clone());
+        Some(stats)
+    }
+
+    /// Makes the per-vertex arrays as long as the mesh's vertex list.
+    fn grow(&mut self) {
+        let n = self.mesh.num_vertices();
+        self.h.resize(n, [0.0; 3]);
+        self.dh.resize(n, [0.0; 3]);
+    }
+
+    /// Energy received by the elements from the current shot (Σ area × mean
+    /// corner ΔH) and the part of it they reflect.
+    fn received(&self) -> (f64, f64) {
+        let leaves: Vec<ElemId> = self.mesh.leaves().collect();
+        let parts: Vec<(f64, f64)> = leaves
+            .par_iter()
+            .map(|&e| {
+                let c = self.mesh.elem_corners(e);
+                let mut d = [0.0; 3];
+                for v in c {
+                    d = add(d, self.dh[v.idx()]);
+                }
+                let w = self.mesh.elem_area(e) / c.len() as f64;
+                let r = self.rho[self.mesh.elem_surface(e).idx()];
+                (sum(d) * w, (d[0] * r[0] + d[1] * r[1] + d[2] * r[2]) * w)
+            })
+            .collect();
+        parts
+            .iter()
+            .fold((0.0, 0.0), |(a, b), (x, y)| (a + x, b + y))
+    }
+
+    /// Adds ΔB·F to the irradiance of the given vertices that see the shooter
+    /// elements; returns how many vertices received something.
+    fn shoot_at(
+        &mut self,
+        targets: &[VertId],
+        shooters: &[(Vec<DVec3>, DVec3)],
+        surface: SurfaceId,
+        normal: DVec3,
+        d_b: Rgb,
+    ) -> usize {
+        let mesh = &self.mesh;
+        let nudge = self.inward(targets);
+        // Candidates: in front of the shooter's plane and facing it.
+        let mut gains = vec![0.0f64; targets.len()];
+        for (poly, c) in shooters {
+            let size = (0..poly.len())
+                .map(|i| (poly[(i + 1) % poly.len()] - poly[i]).length())
+                .fold(0.0, f64::max);
+            let delta = self.opts.offset * size;
+            let cand: Vec<usize> = (0..targets.len())
+                .filter(|&k| {
+                    let v = targets[k];
+                    if mesh.vertex_surface(v) == surface {
+                        return false;
+                    }
+                    let x = mesh.vertex_pos(v);
+                    normal.dot(x - *c) > -delta && mesh.vertex_normal(v).dot(*c - x) > 0.0
+                })
+                .collect();
+            let verts: Vec<VertId> = cand.iter().map(|&k| targets[k]).collect();
+            let seen = self.vis.visible(mesh, *c, surface, &verts);
+            let ff: Vec<(usize, f64)> = cand
+                .par_iter()
+                .zip(&seen)
+                .filter(|(_, s)| **s)
+                .map(|(&k, _)| {
+                    let v = targets[k];
+                    let mut x = mesh.vertex_pos(v);
+                    // §5.4: a receiver on (or just behind) the shooter's plane is
+                    // moved a little in front of it — and first a little into its
+                    // own surface, so that at a corner where several shooters
+                    // meet it takes the limit from inside the receiving surface
+                    // (moving it off one plane only would leave it on the other).
+                    // The same nudged point serves every shooter, so the pieces
+                    // of the hemisphere that neighbouring shooters share add up.
+                    if normal.dot(x - *c) < delta {
+                        x += nudge[k] * delta;
+                        let d = normal.dot(x - *c);
+                        if d < 0.01 * delta {
+                            x += normal * (0.01 * delta - d);
+                        }
+                    }
+                    (k, point_to_polygon(x, mesh.vertex_normal(v), poly))
+                })
+                .collect();
+            for (k, f) in ff {
+                gains[k] += f;
+            }
+        }
+        let mut reached = 0;
+        for (k, &g) in gains.iter().enumerate() {
+            if g > 0.0 {
+                reached += 1;
+                let v = targets[k].idx();
+                let add_h = scale(d_b, g);
+                self.h[v] = add(self.h[v], add_h);
+                self.dh[v] = add(self.dh[v], add_h);
+            }
+        }
+        reached
+    }
+
+    /// For each target vertex, the unit direction into its own surface: the
+    /// mean of the directions toward the centroids of the leaf elements it is
+    /// a corner of.
+    fn inward(&self, targets: &[VertId]) -> Vec<DVec3> {
+        let mut acc = vec![DVec3::ZERO; self.mesh.num_vertices()];
+        for e in self.mesh.leaves() {
+            let c = self.mesh.elem_centroid(e);
+            for &v in self.mesh.elem_corners(e) {
+                acc[v.idx()] += (c - self.mesh.vertex_pos(v)).normalize_or_zero();
+            }
+        }
+        targets
+            .iter()
+            .map(|v| acc[v.idx()].normalize_or_zero())
+            .collect()
+    }
+
+    /// The display ambient term (Cohen et al. 1988): unshot energy spread over
+    /// the scene's area, amplified by the mean interreflection factor.
+    fn ambient(&self) -> Rgb {
+        let np = self.mesh.num_patches();
+        let (mut unshot, mut area, mut rho_a) = ([0.0; 3], 0.0, [0.0; 3]);
+        for p in 0..np {
+            let p = PatchId(p as u32);
+            let a = self.mesh.patch_area(p);
+            unshot = add(unshot, self.unshot(p));
+            area += a;
+            rho_a = add(rho_a, scale(self.rho[self.mesh.patch_surface(p).idx()], a));
+        }
+        if area <= 0.0 {
+            return [0.0; 3];
+        }
+        let mut out = [0.0; 3];
+        for k in 0..3 {
+            let r = (rho_a[k] / area).min(0.99);
+            out[k] = unshot[k] / area / (1.0 - r);
+        }
+        out
+    }
+
+    /// The current solution as a UG model: anchored elements as faces with
+    /// their surface's material, and per-vertex colours (one `c_rgb _radN`
+    /// per distinct value, before the first vertex).
+    pub fn to_model(&self, src: &Model) -> Model {
+        let mut out = self.mesh.to_model(src);
+        let amb = if self.opts.ambient {
+            self.ambient()
+        } else {
+            [0.0; 3]
+        };
+        let mut taken: rustc_hash::FxHashSet<String> =
+            out.materials.iter().map(|m| m.name.clone()).collect();
+        let mut by_value: rustc_hash::FxHashMap<[u64; 3], MaterialId> = Default::default();
+        let mut new_items = Vec::new();
+        let mut counter = 0usize;
+        for v in 0..self.mesh.num_vertices().min(out.vertices.len()) {
+            let vid = VertId(v as u32);
+            let s = self.mesh.vertex_surface(vid).idx();
+            let val = match self.opts.output {
+                Output::Radiosity => {
+                    let b = self.radiosity(vid);
+                    let r = self.rho[s];
+                    [
+                        b[0] + r[0] * amb[0],
+                        b[1] + r[1] * amb[1],
+                        b[2] + r[2] * amb[2],
+                    ]
+                }
+                Output::Irradiance => add(self.h[v], amb),
+            };
+            let key = val.map(|x| (x + 0.0).to_bits());
+            let id = *by_value.entry(key).or_insert_with(|| {
+                let name = loop {
+                    let cand = format!("_rad{counter}");
+                    counter += 1;
+                    if taken.insert(cand.clone()) {
+                        break cand;
+                    }
+                };
+                let id = MaterialId(out.materials.len() as u32);
+                out.materials.push(Material {
+                    name,
+                    def: MaterialDef::Rgb(val),
+                });
+                new_items.push(Item::Material(id));
+                id
+            });
+            out.vertices[v].color = Some(id);
+        }
+        // Colours go before the first vertex statement.
+        let at = out
+            .items
+            .iter()
+            .position(|i| matches!(i, Item::Vertex(_)))
+            .unwrap_or(out.items.len());
+        out.items.splice(at..at, new_items);
+        out
+    }
+}

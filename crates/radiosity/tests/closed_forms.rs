@@ -1,0 +1,189 @@
+//! The solver against closed forms: one unoccluded emitter over a floor, and
+//! a closed enclosure converging to B = E/(1 − ρ), with the energy
+//! bookkeeping checked shot by shot.
+
+use radiosity::{Options, RayVisibility, Solver};
+
+fn patches(src: &str, len: f64) -> ug::Model {
+    let m = ug::parse(src.as_bytes(), "test").unwrap().model;
+    let opts = ugcut::Options {
+        len,
+        eps: 1e-9,
+        angle: 25.0,
+        quads: true,
+    };
+    ugcut::cut(&m, opts).0
+}
+
+/// Form factor from a point to a parallel rectangle [x1,x2]×[y1,y2] at height
+/// h above it (Howell's corner formula, by superposition of signed corners).
+fn rect_ff(x0: f64, y0: f64, h: f64, x1: f64, x2: f64, y1: f64, y2: f64) -> f64 {
+    let f = |a: f64, b: f64| {
+        let (a, b) = (a / h, b / h);
+        let (sa, sb) = ((1.0 + a * a).sqrt(), (1.0 + b * b).sqrt());
+        (a / sa * (b / sa).atan() + b / sb * (a / sb).atan()) / (2.0 * std::f64::consts::PI)
+    };
+    f(x2 - x0, y2 - y0) - f(x1 - x0, y2 - y0) - f(x2 - x0, y1 - y0) + f(x1 - x0, y1 - y0)
+}
+
+#[test]
+fn one_emitter_over_a_floor_matches_the_closed_form() {
+    // A 1 x 1 emitter at height 1 facing down over a 4 x 4 floor.
+    let src = "defmat lamp; diffuse_rgb 0 0 0; emission_rgb 2 3 4; end;\n\
+               c_rgb floor 0.5 0.5 0.5;\n\
+               v l0 0 0 1; v l1 1 0 1; v l2 1 1 1; v l3 0 1 1;\n\
+               f lamp (l0 l3 l2 l1) lamp;\n\
+               v f0 -1.5 -1.5 0; v f1 2.5 -1.5 0; v f2 2.5 2.5 0; v f3 -1.5 2.5 0;\n\
+               f floor (f0 f1 f2 f3) floor;";
+    let model = patches(src, 0.5);
+    let mesh = libmesh::Mesh::from_model(&model, 1e-9).unwrap();
+    let vis = RayVisibility::new(&mesh);
+    // ugcut makes the lamp four patches: they are the four brightest and shoot first.
+    let opts = Options {
+        max_shots: Some(4),
+        gradient: Some(1e30),
+        ..Options::default()
+    };
+    let mut solver = Solver::new(mesh, &model.materials, &vis, opts);
+    solver.solve(None, |_| {});
+    assert_eq!(solver.shots.len(), 4);
+    let lamp = solver
+        .mesh
+        .surfaces()
+        .find(|&s| solver.mesh.surface_normal(s).z < 0.0)
+        .unwrap();
+    for s in &solver.shots {
+        assert_eq!(solver.mesh.patch_surface(libmesh::PatchId(s.patch)), lamp);
+    }
+    let mut checked = 0;
+    for v in 0..solver.mesh.num_vertices() {
+        let v = libmesh::VertId(v as u32);
+        let p = solver.mesh.vertex_pos(v);
+        if p.z != 0.0 {
+            continue;
+        }
+        let f = rect_ff(p.x, p.y, 1.0, 0.0, 1.0, 0.0, 1.0);
+        let h = solver.irradiance(v);
+        for (k, e) in [2.0, 3.0, 4.0].into_iter().enumerate() {
+            assert!(
+                (h[k] - e * f).abs() <= 1e-9 * e * f,
+                "vertex at {p}: H {} vs {}",
+                h[k],
+                e * f
+            );
+        }
+        checked += 1;
+    }
+    assert!(checked >= 81, "{checked} floor vertices");
+}
+
+fn enclosure() -> String {
+    // A unit cube with every face inward, ρ = 0.5 and E = 1.
+    let mut s = String::from("defmat wall; diffuse_rgb 0.5 0.5 0.5; emission_rgb 1 1 1; end;\n");
+    for (n, p) in [
+        ("a", "0 0 0"),
+        ("b", "1 0 0"),
+        ("c", "1 1 0"),
+        ("d", "0 1 0"),
+        ("e", "0 0 1"),
+        ("f", "1 0 1"),
+        ("g", "1 1 1"),
+        ("h", "0 1 1"),
+    ] {
+        s.push_str(&format!("v {n} {p};\n"));
+    }
+    // Inward: the reverse of the outward counter-clockwise order.
+    for c in ["abcd", "ehgf", "aefb", "bfgc", "cghd", "dhea"] {
+        let v: Vec<String> = c.chars().map(|x| x.to_string()).collect();
+        s.push_str(&format!("f ({}) wall;\n", v.join(" ")));
+    }
+    s
+}
+
+#[test]
+fn closed_enclosure_converges_to_e_over_one_minus_rho_with_exact_bookkeeping() {
+    let model = patches(&enclosure(), 0.25);
+    let mesh = libmesh::Mesh::from_model(&model, 1e-9).unwrap();
+    let vis = RayVisibility::new(&mesh);
+    let opts = Options {
+        converge: 1e-6,
+        gradient: Some(1e30),
+        ..Options::default()
+    };
+    let mut solver = Solver::new(mesh, &model.materials, &vis, opts);
+    let emitted = solver.emitted();
+    assert!(
+        (emitted - 3.0 * 6.0).abs() < 1e-12,
+        "E·A summed over channels: {emitted}"
+    );
+    let mut reflected = 0.0;
+    let mut shots = 0;
+    while let Some(p) = (0..solver.mesh.num_patches())
+        .map(|p| libmesh::PatchId(p as u32))
+        .max_by(|a, b| {
+            let (x, y) = (solver.unshot(*a), solver.unshot(*b));
+            (x[0] + x[1] + x[2])
+                .total_cmp(&(y[0] + y[1] + y[2]))
+                .then(b.0.cmp(&a.0))
+        })
+    {
+        if solver.unshot_fraction() <= 1e-6 || shots > 5000 {
+            break;
+        }
+        let s = solver.shoot(p).expect("energy to shoot");
+        shots += 1;
+        // Bookkeeping, shot by shot: the patches hold what was emitted plus
+        // everything reflected so far …
+        reflected += s.reflected;
+        let total = solver.total_energy();
+        assert!(
+            (total - emitted - reflected).abs() <= 1e-9 * total,
+            "shot {shots}: {total} vs {}",
+            emitted + reflected
+        );
+        // … and in a closed room every shot's energy arrives somewhere (up to
+        // the vertex-average quadrature of what the elements received, which
+        // is coarse next to the shooter's edges).
+        assert!(
+            (s.received - s.energy).abs() <= 0.1 * s.energy,
+            "shot {shots}: shot {} received {}",
+            s.energy,
+            s.received
+        );
+        // ρ = 0.5 everywhere: half of what arrives is reflected.
+        assert!((s.reflected - 0.5 * s.received).abs() <= 1e-12 * s.received);
+    }
+    assert!(
+        solver.unshot_fraction() <= 1e-6,
+        "did not converge in {shots} shots"
+    );
+    for v in 0..solver.mesh.num_vertices() {
+        let b = solver.radiosity(libmesh::VertId(v as u32));
+        for x in b {
+            assert!((x - 2.0).abs() < 2e-3, "vertex {v}: B = {x}");
+        }
+    }
+}
+
+#[test]
+fn the_same_bits_at_any_thread_count() {
+    let model = patches(&enclosure(), 0.34);
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mesh = libmesh::Mesh::from_model(&model, 1e-9).unwrap();
+            let vis = RayVisibility::new(&mesh);
+            let opts = Options {
+                max_shots: Some(25),
+                ..Options::default()
+            };
+            let mut solver = Solver::new(mesh, &model.materials, &vis, opts);
+            solver.solve(None, |_| {});
+            ug::write_string(&solver.to_model(&model))
+        })
+    };
+    assert_eq!(run(1), run(3));
+}
