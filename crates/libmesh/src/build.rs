@@ -1,0 +1,405 @@
+//! Building a [`Mesh`] from a patch model: patches, surfaces, vertex copies,
+//! patch adjacency and twin edges.
+
+use std::fmt;
+
+use glam::DVec3;
+use rustc_hash::FxHashMap;
+use ug::{FaceId, Model};
+
+use crate::{Elem, INTERIOR, Mesh, NONE, Patch, PatchId, Surface, VertId};
+
+/// Why a model cannot be meshed.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum BuildError {
+    /// A top-level face is not a triangle or a planar convex quadrilateral.
+    /// `face` is its name, or `#k` for the k-th top-level face (from 1).
+    NotPatch { face: String, reason: String },
+    /// The model has instances or arrays (flatten it first).
+    NotFlat,
+    /// More patches, vertices or elements than `u32` ids can number.
+    TooLarge,
+}
+
+impl fmt::Display for BuildError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            BuildError::NotPatch { face, .. } => write!(
+                f,
+                "face {face} is not a triangle or convex quadrilateral (run ugcut first)"
+            ),
+            BuildError::NotFlat => {
+                write!(f, "the model has instances or arrays (flatten it first)")
+            }
+            BuildError::TooLarge => write!(f, "the model is too large to mesh (over 2^32 items)"),
+        }
+    }
+}
+
+impl std::error::Error for BuildError {}
+
+/// A patch as read from its face, before surfaces are known.
+struct RawPatch {
+    face: FaceId,
+    /// Position classes of the corners (`NONE` for a triangle's fourth).
+    cls: [u32; 4],
+    n: usize,
+    /// Newell normal (twice the area).
+    newell: DVec3,
+    centroid: DVec3,
+    material: Option<ug::MaterialId>,
+}
+
+impl RawPatch {
+    fn unit(&self) -> DVec3 {
+        self.newell.normalize_or_zero()
+    }
+}
+
+/// Union-find over patches.
+struct Dsu(Vec<u32>);
+
+impl Dsu {
+    fn find(&mut self, mut x: u32) -> u32 {
+        while self.0[x as usize] != x {
+            let p = self.0[x as usize];
+            self.0[x as usize] = self.0[p as usize];
+            x = p;
+        }
+        x
+    }
+    fn union(&mut self, a: u32, b: u32) {
+        let (a, b) = (self.find(a), self.find(b));
+        if a != b {
+            // The smaller root wins, for a stable representative.
+            let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+            self.0[hi as usize] = lo;
+        }
+    }
+}
+
+/// Groups input vertices by position: two vertices within `eps` of each
+/// other's class representative share a class (the first one met represents it).
+struct Classes {
+    cell: f64,
+    grid: FxHashMap<[i64; 3], Vec<u32>>,
+    /// Representative input vertex of each class.
+    reps: Vec<u32>,
+    rep_pos: Vec<DVec3>,
+    /// Class of each input vertex (`NONE` until met).
+    of: Vec<u32>,
+}
+
+impl Classes {
+    fn new(nv: usize, eps: f64) -> Classes {
+        Classes {
+            cell: eps,
+            grid: FxHashMap::default(),
+            reps: Vec::new(),
+            rep_pos: Vec::new(),
+            of: vec![NONE; nv],
+        }
+    }
+
+    fn cell_of(&self, p: DVec3) -> [i64; 3] {
+        let c = |x: f64| (x / self.cell).floor() as i64;
+        [c(p.x), c(p.y), c(p.z)]
+    }
+
+    fn class(&mut self, v: ug::VertexId, p: DVec3) -> u32 {
+        if self.of[v.idx()] != NONE {
+            return self.of[v.idx()];
+        }
+        let c = self.cell_of(p);
+        let mut found = NONE;
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let Some(list) = self.grid.get(&[
+                        c[0].saturating_add(dx),
+                        c[1].saturating_add(dy),
+                        c[2].saturating_add(dz),
+                    ]) else {
+                        continue;
+                    };
+                    for &k in list {
+                        if k < found && self.rep_pos[k as usize].distance(p) <= self.cell {
+                            found = k;
+                        }
+                    }
+                }
+            }
+        }
+        if found == NONE {
+            found = self.reps.len() as u32;
+            self.reps.push(v.0);
+            self.rep_pos.push(p);
+            self.grid.entry(c).or_default().push(found);
+        }
+        self.of[v.idx()] = found;
+        found
+    }
+}
+
+fn label(m: &Model, f: FaceId, k: usize) -> String {
+    m.faces[f.idx()]
+        .name
+        .clone()
+        .unwrap_or_else(|| format!("#{}", k + 1))
+}
+
+impl Mesh {
+    /// Builds the mesh of a patch model (the output of `ugcut`): every
+    /// top-level face becomes a patch and must be a triangle or a planar
+    /// convex quadrilateral. Surfaces are the maximal groups of patches
+    /// connected through shared edges (same end positions within `eps`) whose
+    /// patches are coplanar within `eps`, of the same material and facing the
+    /// same way. Each surface gets its own copies of its vertices, created in
+    /// face order. `eps` is a distance; when it is not positive it defaults to
+    /// 10⁻⁶ of the bounding-box diagonal.
+    pub fn from_model(m: &Model, eps: f64) -> Result<Mesh, BuildError> {
+        if !m.instances.is_empty() {
+            return Err(BuildError::NotFlat);
+        }
+        let faces: Vec<FaceId> = m.top_faces().collect();
+        if faces.len() >= (NONE as usize) / 4 || m.vertices.len() >= NONE as usize {
+            return Err(BuildError::TooLarge);
+        }
+        let eps = if eps.is_finite() && eps > 0.0 {
+            eps
+        } else {
+            let diag = m.bounds().map_or(1.0, |(lo, hi)| (hi - lo).length());
+            (diag * 1e-6).max(f64::MIN_POSITIVE)
+        };
+
+        // Patches.
+        let mut classes = Classes::new(m.vertices.len(), eps);
+        let mut raw: Vec<RawPatch> = Vec::with_capacity(faces.len());
+        for (k, &f) in faces.iter().enumerate() {
+            let face = &m.faces[f.idx()];
+            let not_patch = |reason: String| BuildError::NotPatch {
+                face: label(m, f, k),
+                reason,
+            };
+            if face.contours.len() != 1 {
+                return Err(not_patch(format!(
+                    "{} contours (holes or islands)",
+                    face.contours.len()
+                )));
+            }
+            let c = &face.contours[0];
+            if c.len() != 3 && c.len() != 4 {
+                return Err(not_patch(format!("{} vertices", c.len())));
+            }
+            let pts: Vec<DVec3> = c.iter().map(|&v| m.pos(v)).collect();
+            if !pts.iter().all(|p| p.is_finite()) {
+                return Err(not_patch("non-finite coordinates".into()));
+            }
+            let mut cls = [NONE; 4];
+            for (i, &v) in c.iter().enumerate() {
+                cls[i] = classes.class(v, m.pos(v));
+            }
+            let n = c.len();
+            if (0..n).any(|i| (i + 1..n).any(|j| cls[i] == cls[j])) {
+                return Err(not_patch("repeats a vertex (or two coincide)".into()));
+            }
+            let newell = geom::newell_normal(&pts);
+            let (lo, hi) = pts
+                .iter()
+                .fold((pts[0], pts[0]), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+            let size = (hi - lo).length();
+            let area = newell.length() / 2.0;
+            if area.is_nan() || area <= eps * size {
+                return Err(not_patch("zero area (its vertices are collinear)".into()));
+            }
+            let unit = newell.normalize();
+            let centroid = pts.iter().copied().sum::<DVec3>() / n as f64;
+            if n == 4 {
+                if pts.iter().any(|&p| (p - centroid).dot(unit).abs() > eps) {
+                    return Err(not_patch("quadrilateral is not planar".into()));
+                }
+                let convex = (0..4).all(|i| {
+                    let u = pts[(i + 1) % 4] - pts[i];
+                    let w = pts[(i + 2) % 4] - pts[(i + 1) % 4];
+                    u.cross(w).dot(unit) > 1e-12 * u.length() * w.length()
+                });
+                if !convex {
+                    return Err(not_patch("quadrilateral is not convex".into()));
+                }
+            }
+            raw.push(RawPatch {
+                face: f,
+                cls,
+                n,
+                newell,
+                centroid,
+                material: face.material,
+            });
+        }
+
+        // Patch edges, sorted by their end classes.
+        // (smaller class, larger class, patch, edge index)
+        let mut edges: Vec<(u32, u32, u32, u8)> = Vec::new();
+        for (p, r) in raw.iter().enumerate() {
+            for k in 0..r.n {
+                let (a, b) = (r.cls[k], r.cls[(k + 1) % r.n]);
+                edges.push((a.min(b), a.max(b), p as u32, k as u8));
+            }
+        }
+        edges.sort_unstable();
+        let groups: Vec<&[(u32, u32, u32, u8)]> = edges
+            .chunk_by(|x, y| (x.0, x.1) == (y.0, y.1))
+            .filter(|g| g.len() > 1)
+            .collect();
+        let forward = |p: u32, k: u8| {
+            let r = &raw[p as usize];
+            r.cls[k as usize] < r.cls[(k as usize + 1) % r.n]
+        };
+        let coplanar = |a: &RawPatch, b: &RawPatch| {
+            let (na, nb) = (a.unit(), b.unit());
+            if na.dot(nb) <= 0.0 {
+                return false;
+            }
+            let near = |r: &RawPatch, n: DVec3, c: DVec3| {
+                r.cls[..r.n]
+                    .iter()
+                    .all(|&k| (classes.rep_pos[k as usize] - c).dot(n).abs() <= eps)
+            };
+            near(b, na, a.centroid) && near(a, nb, b.centroid)
+        };
+        let joins = |x: &(u32, u32, u32, u8), y: &(u32, u32, u32, u8)| {
+            let (a, b) = (&raw[x.2 as usize], &raw[y.2 as usize]);
+            x.2 != y.2
+                && forward(x.2, x.3) != forward(y.2, y.3)
+                && a.material == b.material
+                && coplanar(a, b)
+        };
+
+        // Surfaces.
+        let mut dsu = Dsu((0..raw.len() as u32).collect());
+        for g in &groups {
+            for i in 0..g.len() {
+                for j in i + 1..g.len() {
+                    if joins(&g[i], &g[j]) {
+                        dsu.union(g[i].2, g[j].2);
+                    }
+                }
+            }
+        }
+        let mut surf_of_root: FxHashMap<u32, u32> = FxHashMap::default();
+        let mut surfaces: Vec<Surface> = Vec::new();
+        let mut psurf = vec![0u32; raw.len()];
+        for (p, r) in raw.iter().enumerate() {
+            let root = dsu.find(p as u32);
+            let s = *surf_of_root.entry(root).or_insert_with(|| {
+                surfaces.push(Surface {
+                    normal: DVec3::ZERO,
+                    material: r.material,
+                    patches: Vec::new(),
+                });
+                surfaces.len() as u32 - 1
+            });
+            psurf[p] = s;
+            surfaces[s as usize].patches.push(PatchId(p as u32));
+            surfaces[s as usize].normal += r.newell;
+        }
+        for s in &mut surfaces {
+            s.normal = s.normal.normalize_or_zero();
+        }
+
+        // Vertex copies, one per (surface, class), in face order.
+        let mut vmap: FxHashMap<(u32, u32), u32> = FxHashMap::default();
+        let mut pos = Vec::new();
+        let mut vsurf = Vec::new();
+        let mut vparent = Vec::new();
+        let mut elems = Vec::with_capacity(raw.len());
+        let mut patches = Vec::with_capacity(raw.len());
+        for (p, r) in raw.iter().enumerate() {
+            let s = psurf[p];
+            let mut v = [VertId(NONE); 4];
+            for (i, &c) in r.cls[..r.n].iter().enumerate() {
+                let id = *vmap.entry((s, c)).or_insert_with(|| {
+                    pos.push(classes.rep_pos[c as usize]);
+                    vsurf.push(s);
+                    vparent.push([classes.reps[c as usize], NONE]);
+                    pos.len() as u32 - 1
+                });
+                v[i] = VertId(id);
+            }
+            let mut pedge = 0u16;
+            for k in 0..4 {
+                pedge |= (if k < r.n { k as u16 } else { INTERIOR }) << (3 * k);
+            }
+            elems.push(Elem {
+                v,
+                children: NONE,
+                parent: NONE,
+                patch: p as u32,
+                pedge,
+                level: 0,
+            });
+            patches.push(Patch {
+                surface: s,
+                face: r.face,
+                area: r.newell.length() / 2.0,
+                adj: [NONE; 4],
+            });
+        }
+        if pos.len() >= NONE as usize {
+            return Err(BuildError::TooLarge);
+        }
+
+        // Adjacency inside surfaces, and twins across them.
+        let mut twins: Vec<Vec<[VertId; 2]>> = vec![Vec::new(); raw.len() * 4];
+        for g in &groups {
+            for i in 0..g.len() {
+                let (pi, ki) = (g[i].2, g[i].3 as usize);
+                let ri = &raw[pi as usize];
+                let (c0, c1) = (ri.cls[ki], ri.cls[(ki + 1) % ri.n]);
+                for j in 0..g.len() {
+                    let (pj, kj) = (g[j].2, g[j].3 as usize);
+                    if pi == pj {
+                        continue;
+                    }
+                    let (si, sj) = (psurf[pi as usize], psurf[pj as usize]);
+                    if si == sj {
+                        if patches[pi as usize].adj[ki] == NONE
+                            && patches[pj as usize].adj[kj] == NONE
+                            && joins(&g[i], &g[j])
+                        {
+                            patches[pi as usize].adj[ki] = pj * 4 + kj as u32;
+                            patches[pj as usize].adj[kj] = pi * 4 + ki as u32;
+                        }
+                    } else {
+                        let t = [VertId(vmap[&(sj, c0)]), VertId(vmap[&(sj, c1)])];
+                        let list = &mut twins[pi as usize * 4 + ki];
+                        if !list.contains(&t) {
+                            list.push(t);
+                        }
+                    }
+                }
+            }
+        }
+        let mut twin_start = Vec::with_capacity(twins.len() + 1);
+        let mut twin_verts = Vec::new();
+        twin_start.push(0u32);
+        for t in twins {
+            twin_verts.extend(t);
+            twin_start.push(twin_verts.len() as u32);
+        }
+
+        Ok(Mesh {
+            pos,
+            vsurf,
+            vparent,
+            mid: FxHashMap::default(),
+            n_leaves: elems.len(),
+            elems,
+            patches,
+            twin_start,
+            twin_verts,
+            surfaces,
+            eps,
+        })
+    }
+}

@@ -1,0 +1,695 @@
+use glam::DVec3;
+use ug::Model;
+
+use crate::refine::{ChildEdge, child_edge};
+use crate::*;
+
+const EPS: f64 = 1e-9;
+
+fn parse(src: &str) -> Model {
+    ug::parse(src.as_bytes(), "<test>").unwrap().model
+}
+
+fn mesh(src: &str) -> (Model, Mesh) {
+    let m = parse(src);
+    let mesh = Mesh::from_model(&m, EPS).unwrap();
+    (m, mesh)
+}
+
+/// An `nx` × `ny` grid of unit quads in the z = 0 plane, vertices `gI_J`, faces `qI_J`.
+fn grid(nx: usize, ny: usize) -> String {
+    let mut s = String::from("c_rgb grey 0.5 0.5 0.5;\n");
+    for j in 0..=ny {
+        for i in 0..=nx {
+            s += &format!("v g{i}_{j} {i} {j} 0;\n");
+        }
+    }
+    for j in 0..ny {
+        for i in 0..nx {
+            s += &format!(
+                "f q{i}_{j} (g{i}_{j} g{}_{j} g{}_{} g{i}_{}) grey;\n",
+                i + 1,
+                i + 1,
+                j + 1,
+                j + 1
+            );
+        }
+    }
+    s
+}
+
+/// Floor (z = 0, facing up) and wall (y = 0, facing +y) sharing the edge a–b.
+const FLOOR_WALL: &str = "c_rgb grey 0.5 0.5 0.5;
+v a 0 0 0; v b 1 0 0; v c 1 1 0; v d 0 1 0; v e 0 0 1; v f 1 0 1;
+f floor (a b c d) grey;
+f wall (a e f b) grey;";
+
+/// The leaf of patch `p` whose polygon contains point `x` (strictly inside).
+fn leaf_at(m: &Mesh, p: PatchId, x: DVec3) -> ElemId {
+    let n = m.surface_normal(m.patch_surface(p));
+    m.patch_leaves(p)
+        .into_iter()
+        .find(|&e| {
+            let c = m.elem_corners(e);
+            (0..c.len()).all(|k| {
+                let a = m.vertex_pos(c[k]);
+                let b = m.vertex_pos(c[(k + 1) % c.len()]);
+                (b - a).cross(x - a).dot(n) > 0.0
+            })
+        })
+        .expect("a leaf contains the point")
+}
+
+fn ugcheck_clean(src: &Model, m: &Mesh) {
+    let out = m.to_model(src);
+    let r = ugcheck::check(&out, 1e-9);
+    assert!(r.tvertices.is_empty(), "T-vertices: {:?}", r.tvertices);
+    assert!(r.degenerate.is_empty(), "degenerate: {:?}", r.degenerate);
+    assert!(
+        r.inconsistent.is_empty(),
+        "inconsistent: {:?}",
+        r.inconsistent
+    );
+    assert!(r.nonpatch.is_empty(), "nonpatch: {:?}", r.nonpatch);
+}
+
+#[test]
+fn element_record_is_32_bytes() {
+    assert_eq!(std::mem::size_of::<Elem>(), 32);
+    assert_eq!(Mesh::record_sizes().0, 32);
+}
+
+#[test]
+fn child_edge_table_matches_the_split_layout() {
+    for src in [
+        grid(1, 1),
+        "v a 0 0 0; v b 1 0 0; v c 0 1 0; f t (a b c);".to_string(),
+    ] {
+        let (_, mut m) = mesh(&src);
+        m.split(ElemId(0));
+        let root = m.elems[0];
+        let n = root.n();
+        for c in 0..4usize {
+            let ch = m.elems[(root.children + c as u32) as usize];
+            for k in 0..n {
+                let (a, b) = (ch.v[k], ch.v[(k + 1) % n]);
+                match child_edge(n, c, k) {
+                    ChildEdge::Sibling { child, edge } => {
+                        let s = m.elems[(root.children + child as u32) as usize];
+                        assert_eq!(
+                            (s.v[edge], s.v[(edge + 1) % n]),
+                            (b, a),
+                            "n={n} c={c} k={k}"
+                        );
+                    }
+                    ChildEdge::Parent { j, half } => {
+                        let (p0, p1) = (root.v[j], root.v[(j + 1) % n]);
+                        let mid = m.edge_midpoint(p0, p1).unwrap();
+                        let want = if half == 0 { (p0, mid) } else { (mid, p1) };
+                        assert_eq!((a, b), want, "n={n} c={c} k={k}");
+                        assert_eq!(ch.pedge(k), j as u16);
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn single_quad_split() {
+    let (src, mut m) = mesh(&grid(1, 1));
+    assert_eq!(
+        (m.num_patches(), m.num_surfaces(), m.num_vertices()),
+        (1, 1, 4)
+    );
+    assert_eq!(m.surface_normal(SurfaceId(0)), DVec3::Z);
+    let s = m.split(ElemId(0));
+    assert_eq!(s.refined, vec![ElemId(0)]);
+    assert_eq!(s.new_vertices.len(), 5);
+    let ids: Vec<u32> = s.new_vertices.iter().map(|n| n.v.0).collect();
+    assert_eq!(ids, vec![4, 5, 6, 7, 8]);
+    for nv in &s.new_vertices {
+        let [a, b] = nv.parents;
+        assert_eq!(
+            m.vertex_pos(nv.v),
+            (m.vertex_pos(a) + m.vertex_pos(b)) * 0.5
+        );
+    }
+    assert_eq!(m.vertex_pos(VertId(8)), DVec3::new(0.5, 0.5, 0.0));
+    assert_eq!(m.num_leaves(), 4);
+    let leaves: Vec<ElemId> = m.leaves().collect();
+    assert_eq!(leaves, vec![ElemId(1), ElemId(2), ElemId(3), ElemId(4)]);
+    for &e in &leaves {
+        assert_eq!(m.elem_level(e), 1);
+        assert_eq!(m.elem_area(e), 0.25);
+        assert_eq!(m.elem_longest_edge(e), 0.5);
+        assert_eq!(m.elem_patch(e), PatchId(0));
+        assert_eq!(m.elem_parent(e), Some(ElemId(0)));
+        assert_eq!(m.anchored(e), vec![m.elem_corners(e).to_vec()]);
+    }
+    // Child c keeps corner c.
+    for (c, &e) in leaves.iter().enumerate() {
+        assert_eq!(m.elem_corners(e)[c], m.patch_corners(PatchId(0))[c]);
+    }
+    assert_eq!(m.elem_neighbors(ElemId(1)), vec![ElemId(2), ElemId(4)]);
+    // Splitting a non-leaf does nothing.
+    assert_eq!(m.split(ElemId(0)), Split::default());
+    assert_eq!(m.split(ElemId(99)), Split::default());
+    m.validate().unwrap();
+    ugcheck_clean(&src, &m);
+}
+
+#[test]
+fn quad_split_in_one_corner_forces_balance() {
+    let (src, mut m) = mesh(&grid(1, 1));
+    let p = PatchId(0);
+    m.split(ElemId(0));
+    // Always split the leaf just below and left of the centre: each split
+    // pushes the refinement one level deeper against the coarse quadrants.
+    let x = DVec3::new(0.49, 0.49, 0.0);
+    let mut refined_counts = Vec::new();
+    for _ in 0..4 {
+        let e = leaf_at(&m, p, x);
+        let s = m.split(e);
+        assert_eq!(s.refined[0], e);
+        refined_counts.push(s.refined.len());
+        m.validate().unwrap();
+        assert!(m.unbalanced_pairs(p).is_empty());
+    }
+    // Level 2 needs nothing; level 3 splits the two level-1 quadrants at the
+    // centre; level 4 splits their children at the centre and, for those, the
+    // third quadrant; level 5 likewise one level down.
+    assert_eq!(refined_counts, vec![1, 3, 4, 4]);
+    let lv = |x: f64, y: f64| m.elem_level(leaf_at(&m, p, DVec3::new(x, y, 0.0)));
+    assert_eq!(lv(0.49, 0.49), 5);
+    assert_eq!(lv(0.51, 0.49), 4);
+    assert_eq!(lv(0.49, 0.51), 4);
+    assert_eq!(lv(0.51, 0.51), 3);
+    assert_eq!(lv(0.99, 0.01), 2);
+    assert_eq!(lv(0.99, 0.99), 2);
+    assert_eq!(lv(0.01, 0.01), 2);
+    ugcheck_clean(&src, &m);
+}
+
+#[test]
+fn triangle_split() {
+    let (src, mut m) = mesh("v a 0 0 0; v b 2 0 0; v c 0 2 0; f t (a b c);");
+    let s = m.split(ElemId(0));
+    assert_eq!(s.new_vertices.len(), 3);
+    let leaves: Vec<ElemId> = m.leaves().collect();
+    assert_eq!(leaves.len(), 4);
+    let [a, b, c] = [VertId(0), VertId(1), VertId(2)];
+    let m01 = m.edge_midpoint(a, b).unwrap();
+    let m12 = m.edge_midpoint(b, c).unwrap();
+    let m20 = m.edge_midpoint(c, a).unwrap();
+    assert_eq!(m.elem_corners(leaves[0]), &[a, m01, m20]);
+    assert_eq!(m.elem_corners(leaves[1]), &[m01, b, m12]);
+    assert_eq!(m.elem_corners(leaves[2]), &[m20, m12, c]);
+    assert_eq!(m.elem_corners(leaves[3]), &[m12, m20, m01]);
+    for &e in &leaves {
+        assert!((m.elem_area(e) - 0.5).abs() < 1e-15);
+    }
+    // The centre child's neighbours are the three corner children.
+    assert_eq!(
+        m.elem_neighbors(leaves[3]),
+        vec![leaves[2], leaves[0], leaves[1]]
+    );
+    // Split the centre child twice more towards the centre: balance splits corner children.
+    let s = m.split(leaves[3]);
+    assert_eq!(s.refined, vec![leaves[3]]);
+    let inner = m.elem_children(leaves[3]).unwrap()[3];
+    let s = m.split(inner);
+    assert_eq!(s.refined.len(), 1);
+    let x = m.elem_centroid(m.elem_children(inner).unwrap()[0]);
+    let e = leaf_at(&m, PatchId(0), x);
+    let s = m.split(e);
+    assert!(s.refined.len() > 1, "{:?}", s.refined);
+    m.validate().unwrap();
+    assert!(m.unbalanced_pairs(PatchId(0)).is_empty());
+    let total: f64 = m.leaves().map(|e| m.elem_area(e)).sum();
+    assert!((total - 2.0).abs() < 1e-12);
+    ugcheck_clean(&src, &m);
+}
+
+#[test]
+fn balance_crosses_patch_boundaries() {
+    let (src, mut m) = mesh(&grid(2, 1));
+    assert_eq!(
+        (m.num_patches(), m.num_surfaces(), m.num_vertices()),
+        (2, 1, 6)
+    );
+    m.split(ElemId(0));
+    // Child 1 of patch 0 touches the shared edge x = 1; its children would be
+    // two levels deeper than the unsplit patch 1.
+    let c1 = m.elem_children(ElemId(0)).unwrap()[1];
+    assert_eq!(
+        m.elem_neighbors(c1),
+        vec![
+            ElemId(1),
+            m.elem_children(ElemId(0)).unwrap()[2],
+            m.elem_children(ElemId(0)).unwrap()[0]
+        ]
+    );
+    let s = m.split(c1);
+    assert_eq!(s.refined, vec![c1, ElemId(1)]);
+    // The shared edge's midpoint was made once and is shared.
+    let g10 = VertId(1);
+    let g11 = VertId(2);
+    assert_eq!(m.vertex_pos(g10), DVec3::new(1.0, 0.0, 0.0));
+    let mid = m.edge_midpoint(g10, g11).unwrap();
+    assert!(
+        m.elem_corners(m.elem_children(ElemId(0)).unwrap()[1])
+            .contains(&mid)
+    );
+    assert!(
+        m.elem_corners(m.elem_children(ElemId(1)).unwrap()[0])
+            .contains(&mid)
+    );
+    m.validate().unwrap();
+    // Patch 1's child 0 has hanging midpoints from patch 0's grandchildren.
+    let p1c0 = m.elem_children(ElemId(1)).unwrap()[0];
+    assert_eq!(m.anchored(p1c0).len(), 3);
+    ugcheck_clean(&src, &m);
+}
+
+#[test]
+fn stitching_floor_and_wall() {
+    let (src, mut m) = mesh(FLOOR_WALL);
+    assert_eq!(m.num_surfaces(), 2);
+    assert_eq!(m.num_vertices(), 8, "a and b have one copy per surface");
+    assert_eq!(m.surface_normal(SurfaceId(0)), DVec3::Z);
+    assert_eq!(m.surface_normal(SurfaceId(1)), DVec3::Y);
+    let floor = PatchId(0);
+    let wall = PatchId(1);
+    let [fa, fb, _, _]: [VertId; 4] = m.patch_corners(floor).try_into().unwrap();
+    let [wa, _, _, wb]: [VertId; 4] = m.patch_corners(wall).try_into().unwrap();
+    assert_ne!(fa, wa);
+    assert_eq!(m.vertex_pos(fa), m.vertex_pos(wa));
+    assert_eq!(m.vertex_surface(wa), SurfaceId(1));
+
+    let s = m.split(m.patch_root(floor));
+    assert_eq!(
+        s.refined,
+        vec![m.patch_root(floor)],
+        "the wall is not split"
+    );
+    // The floor's midpoint of a-b, then the wall's stitched copy, then the rest.
+    let fm = m.edge_midpoint(fa, fb).unwrap();
+    let wm = m.edge_midpoint(wa, wb).unwrap();
+    assert_eq!(
+        s.new_vertices[0],
+        NewVertex {
+            v: fm,
+            parents: [fa, fb]
+        }
+    );
+    assert_eq!(
+        s.new_vertices[1],
+        NewVertex {
+            v: wm,
+            parents: [wa, wb]
+        }
+    );
+    assert_eq!(s.new_vertices.len(), 6);
+    assert_eq!(m.vertex_pos(wm), DVec3::new(0.5, 0.0, 0.0));
+    assert_eq!(m.vertex_surface(wm), SurfaceId(1));
+    // The wall leaf keeps its corners; its anchored contour holds the copy.
+    let wroot = m.patch_root(wall);
+    assert!(m.elem_is_leaf(wroot));
+    assert_eq!(m.elem_contour(wroot).len(), 5);
+    let pieces = m.anchored(wroot);
+    assert_eq!(pieces.len(), 3);
+    assert!(
+        pieces.iter().all(|p| p[0] == wm),
+        "fanned from the stitched vertex"
+    );
+    m.validate().unwrap();
+    ugcheck_clean(&src, &m);
+
+    // Deeper floor refinement along the edge: a chain of stitched vertices.
+    let fc0 = m.elem_children(m.patch_root(floor)).unwrap()[0];
+    let s = m.split(fc0);
+    assert_eq!(s.refined, vec![fc0]);
+    let q = m.edge_midpoint(fa, fm).unwrap();
+    let wq = m.edge_midpoint(wa, wm).unwrap();
+    assert!(s.new_vertices.contains(&NewVertex {
+        v: wq,
+        parents: [wa, wm]
+    }));
+    assert_eq!(m.vertex_pos(wq), m.vertex_pos(q));
+    assert_eq!(m.edge_vertices(wb, wa), vec![wm, wq]);
+    let pieces = m.anchored(wroot);
+    assert!(pieces.len() >= 3, "{pieces:?}");
+    m.validate().unwrap();
+    ugcheck_clean(&src, &m);
+
+    // The wall now splits: it reuses the stitched vertex, nothing goes back.
+    let s = m.split(wroot);
+    assert_eq!(
+        s.new_vertices.len(),
+        4,
+        "three edge midpoints and the centre"
+    );
+    assert!(!s.new_vertices.iter().any(|n| n.v == wm));
+    let wc0 = m.elem_children(wroot).unwrap()[0];
+    assert_eq!(m.elem_corners(wc0)[3], wm);
+    // Wall child 0 (at a) has the floor's quarter point on its edge.
+    assert_eq!(m.anchored(wc0).len(), 3);
+    m.validate().unwrap();
+    ugcheck_clean(&src, &m);
+
+    // Refining the wall along the edge stitches back into the floor.
+    let s = m.split(m.elem_children(wroot).unwrap()[3]);
+    let back: Vec<_> = s
+        .new_vertices
+        .iter()
+        .filter(|n| m.vertex_surface(n.v) == SurfaceId(0))
+        .collect();
+    assert_eq!(back.len(), 1);
+    assert_eq!(m.vertex_pos(back[0].v), DVec3::new(0.75, 0.0, 0.0));
+    assert_eq!(back[0].parents, [fb, fm], "in the wall edge's direction");
+    m.validate().unwrap();
+    ugcheck_clean(&src, &m);
+}
+
+#[test]
+fn stitching_walks_down_a_long_chain() {
+    let (src, mut m) = mesh(FLOOR_WALL);
+    let floor = PatchId(0);
+    let wall = PatchId(1);
+    // Refine the floor 6 levels at corner a (always child 0).
+    let mut e = m.patch_root(floor);
+    for _ in 0..6 {
+        m.split(e);
+        e = m.elem_children(e).unwrap()[0];
+    }
+    let [wa, _, _, wb]: [VertId; 4] = m.patch_corners(wall).try_into().unwrap();
+    assert_eq!(m.edge_vertices(wb, wa).len(), 6);
+    let wroot = m.patch_root(wall);
+    let pieces = m.anchored(wroot);
+    assert!(pieces.iter().all(|p| p.len() == 3 || p.len() == 4));
+    m.validate().unwrap();
+    ugcheck_clean(&src, &m);
+}
+
+/// A 3 × 3 grid; hanging midpoints on the centre patch's edges come from
+/// splitting its four edge neighbours.
+#[test]
+fn anchored_quad_configurations() {
+    // Edge k of the centre patch q1_1 faces: 0 → q1_0, 1 → q2_1, 2 → q1_2, 3 → q0_1.
+    let neighbour = [1u32, 5, 7, 3]; // q1_0, q2_1, q1_2, q0_1 (face order j * 3 + i)
+    let expect = |mask: u32| -> (usize, usize) {
+        // (triangles, quads)
+        match mask.count_ones() {
+            0 => (0, 1),
+            1 => (3, 0),
+            2 if mask == 0b0101 || mask == 0b1010 => (0, 2),
+            2 => (2, 1),
+            3 => (3, 1),
+            _ => (4, 1),
+        }
+    };
+    for mask in 0u32..16 {
+        let (src, mut m) = mesh(&grid(3, 3));
+        for (k, &nb) in neighbour.iter().enumerate() {
+            if mask & (1 << k) != 0 {
+                m.split(ElemId(nb));
+            }
+        }
+        let centre = ElemId(4);
+        assert!(m.elem_is_leaf(centre));
+        let pieces = m.anchored(centre);
+        let tris = pieces.iter().filter(|p| p.len() == 3).count();
+        let quads = pieces.iter().filter(|p| p.len() == 4).count();
+        assert_eq!((tris, quads), expect(mask), "mask {mask:04b}: {pieces:?}");
+        let area: f64 = pieces
+            .iter()
+            .map(|p| {
+                let pts: Vec<DVec3> = p.iter().map(|&v| m.vertex_pos(v)).collect();
+                geom::newell_normal(&pts).z / 2.0
+            })
+            .sum();
+        assert!((area - 1.0).abs() < 1e-12, "mask {mask:04b}: area {area}");
+        m.validate().unwrap();
+        ugcheck_clean(&src, &m);
+    }
+}
+
+#[test]
+fn anchored_triangle_configurations() {
+    // A big triangle cut into four patches; the centre one (t3) has one
+    // neighbour across each edge.
+    let src = "v a 0 0 0; v b 4 0 0; v c 0 4 0; v ab 2 0 0; v bc 2 2 0; v ca 0 2 0;
+        f t0 (a ab ca); f t1 (ab b bc); f t2 (ca bc c); f t3 (bc ca ab);";
+    // Edge k of t3: 0 = bc-ca faces t2, 1 = ca-ab faces t0, 2 = ab-bc faces t1.
+    let neighbour = [2u32, 0, 1];
+    for mask in 0u32..8 {
+        let (srcm, mut m) = mesh(src);
+        assert_eq!(m.num_surfaces(), 1);
+        for (k, &nb) in neighbour.iter().enumerate() {
+            if mask & (1 << k) != 0 {
+                m.split(ElemId(nb));
+            }
+        }
+        let pieces = m.anchored(ElemId(3));
+        let tris = pieces.iter().filter(|p| p.len() == 3).count();
+        let quads = pieces.iter().filter(|p| p.len() == 4).count();
+        let want = match mask.count_ones() {
+            0 => (1, 0),
+            1 => (2, 0),
+            2 => (1, 1),
+            _ => (4, 0),
+        };
+        assert_eq!((tris, quads), want, "mask {mask:03b}: {pieces:?}");
+        let area: f64 = pieces
+            .iter()
+            .map(|p| {
+                let pts: Vec<DVec3> = p.iter().map(|&v| m.vertex_pos(v)).collect();
+                geom::newell_normal(&pts).z / 2.0
+            })
+            .sum();
+        assert!((area - 2.0).abs() < 1e-12);
+        m.validate().unwrap();
+        ugcheck_clean(&srcm, &m);
+    }
+}
+
+#[test]
+fn areas_sum_to_patch_areas() {
+    // A convex, non-rectangular quad and a triangle sharing an edge.
+    let (src, mut m) = mesh(
+        "v a 0 0 0; v b 3 0 0; v c 2.5 2 0; v d 0.3 1.7 0; v e 1.5 -2 0;
+         f q (a b c d); f t (a e b);",
+    );
+    assert_eq!(m.num_surfaces(), 1);
+    let want = [m.patch_area(PatchId(0)), m.patch_area(PatchId(1))];
+    assert!((want[1] - 3.0).abs() < 1e-12);
+    for round in 0..4 {
+        let leaves: Vec<ElemId> = m.leaves().collect();
+        for (i, e) in leaves.into_iter().enumerate() {
+            if (i + round) % 3 == 0 && m.elem_is_leaf(e) {
+                m.split(e);
+            }
+        }
+    }
+    for p in m.patches() {
+        let s: f64 = m.patch_leaves(p).iter().map(|&e| m.elem_area(e)).sum();
+        assert!((s - want[p.idx()]).abs() <= 1e-12 * want[p.idx()]);
+        let mut a = 0.0;
+        for e in m.patch_leaves(p) {
+            for piece in m.anchored(e) {
+                let pts: Vec<DVec3> = piece.iter().map(|&v| m.vertex_pos(v)).collect();
+                a += geom::newell_normal(&pts).z / 2.0;
+            }
+        }
+        assert!((a - want[p.idx()]).abs() <= 1e-12 * want[p.idx()]);
+    }
+    m.validate().unwrap();
+    ugcheck_clean(&src, &m);
+}
+
+#[test]
+fn surfaces_group_by_plane_material_and_orientation() {
+    // L-shaped floor of three quads, a rug (other material) next to it, and
+    // a patch folded up at 90°.
+    let src = "c_rgb grey 0.5 0.5 0.5; c_rgb red 0.9 0.1 0.1;
+        v a 0 0 0; v b 1 0 0; v c 2 0 0; v d 0 1 0; v e 1 1 0; v f 2 1 0;
+        v g 0 2 0; v h 1 2 0; v i 3 0 0; v j 3 1 0; v k 0 0 1; v l 1 0 1;
+        f q0 (a b e d) grey; f q1 (b c f e) grey; f q2 (d e h g) grey;
+        f rug (c i j f) red; f up (a k l b) grey;";
+    let (srcm, mut m) = mesh(src);
+    assert_eq!(m.num_surfaces(), 3);
+    assert_eq!(
+        m.surface_patches(SurfaceId(0)),
+        &[PatchId(0), PatchId(1), PatchId(2)]
+    );
+    assert_eq!(m.surface_patches(SurfaceId(1)), &[PatchId(3)]);
+    assert_eq!(m.surface_patches(SurfaceId(2)), &[PatchId(4)]);
+    assert_eq!(
+        m.surface_material(SurfaceId(1)),
+        srcm.material_by_name("red")
+    );
+    // 8 floor vertices, 4 rug, 4 up.
+    assert_eq!(m.num_vertices(), 16);
+    // Balance runs around the L; stitching reaches the rug and the upright patch.
+    let mut e = ElemId(1);
+    for _ in 0..3 {
+        m.split(e);
+        e = m.elem_children(e).unwrap()[1];
+    }
+    m.validate().unwrap();
+    assert!(
+        m.surface_patches(SurfaceId(0))
+            .iter()
+            .all(|&p| m.unbalanced_pairs(p).is_empty())
+    );
+    ugcheck_clean(&srcm, &m);
+}
+
+#[test]
+fn build_errors() {
+    let err = |s: &str| Mesh::from_model(&parse(s), EPS).unwrap_err();
+    let e = err("v a 0 0 0; v b 1 0 0; v c 1 1 0; v d 0.5 1.5 0; v e 0 1 0; f penta (a b c d e);");
+    assert_eq!(
+        e.to_string(),
+        "face penta is not a triangle or convex quadrilateral (run ugcut first)"
+    );
+    assert!(
+        matches!(&e, BuildError::NotPatch { face, reason } if face == "penta" && reason.contains("5 vertices"))
+    );
+    let e = err("v a 0 0 0; v b 2 0 0; v c 0.5 0.5 0; v d 0 2 0; f (a b c d);");
+    assert!(
+        matches!(&e, BuildError::NotPatch { face, reason } if face == "#1" && reason.contains("not convex"))
+    );
+    let e = err("v a 0 0 0; v b 1 0 0; v c 1 1 1; v d 0 1 0; f t (a b d); f warp (a b c d);");
+    assert!(
+        matches!(&e, BuildError::NotPatch { face, reason } if face == "warp" && reason.contains("planar"))
+    );
+    let e = err("v a 0 0 0; v b 1 0 0; v c 2 0 0; f line (a b c);");
+    assert!(matches!(&e, BuildError::NotPatch { reason, .. } if reason.contains("zero area")));
+    let e = err(
+        "v a 0 0 0; v b 3 0 0; v c 3 3 0; v d 0 3 0; v e 1 1 0; v f 1 2 0; v g 2 1 0;
+         f holed (a b c d) (e f g);",
+    );
+    assert!(matches!(&e, BuildError::NotPatch { reason, .. } if reason.contains("contours")));
+    let e = err("def box; v a 0 0 0; v b 1 0 0; v c 0 1 0; f t (a b c); end; i (box);");
+    assert_eq!(e, BuildError::NotFlat);
+    // An empty model is a valid, empty mesh.
+    let m = Mesh::from_model(&Model::new(), EPS).unwrap();
+    assert_eq!((m.num_patches(), m.leaves().count()), (0, 0));
+    m.validate().unwrap();
+}
+
+#[test]
+fn coincident_input_vertices_are_merged() {
+    // Two quads whose shared edge uses distinct vertices at the same places.
+    let (_, m) = mesh(
+        "v a 0 0 0; v b 1 0 0; v c 1 1 0; v d 0 1 0;
+         v b2 1 0 0; v e 2 0 0; v f 2 1 0; v c2 1 1 0;
+         f l (a b c d); f r (b2 e f c2);",
+    );
+    assert_eq!((m.num_surfaces(), m.num_vertices()), (1, 6));
+}
+
+#[test]
+fn model_output_names() {
+    let (src, mut m) = mesh(FLOOR_WALL);
+    let out = m.to_model(&src);
+    let names: Vec<&str> = out.vertices.iter().map(|v| v.name.as_str()).collect();
+    assert_eq!(names, ["a", "b", "c", "d", "a.1", "e", "f", "b.1"]);
+    let faces: Vec<Option<&str>> = out.faces.iter().map(|f| f.name.as_deref()).collect();
+    assert_eq!(faces, [Some("floor"), Some("wall")]);
+    m.split(m.patch_root(PatchId(0)));
+    let out = m.to_model(&src);
+    assert_eq!(out.vertices.len(), m.num_vertices());
+    for (k, v) in out.vertices.iter().enumerate() {
+        assert_eq!(v.pos, m.vertex_pos(VertId(k as u32)));
+    }
+    let names: Vec<&str> = out.vertices.iter().map(|v| v.name.as_str()).collect();
+    // Floor midpoints a-b, b-c, c-d, d-a, the wall's stitched copy of a-b's, centre.
+    assert_eq!(&names[8..], ["a.2", "a.1.1", "b.2", "c.1", "d.1", "a.2.1"]);
+    let faces: Vec<Option<&str>> = out.faces.iter().map(|f| f.name.as_deref()).collect();
+    assert_eq!(
+        faces,
+        [
+            Some("floor.1"),
+            Some("floor.2"),
+            Some("floor.3"),
+            Some("floor.4"),
+            Some("wall.1"),
+            Some("wall.2"),
+            Some("wall.3")
+        ]
+    );
+    assert!(
+        out.faces
+            .iter()
+            .all(|f| f.material == src.material_by_name("grey"))
+    );
+    // Round trip through text, then check.
+    let text = ug::write_string(&out);
+    let back = parse(&text);
+    assert_eq!(back, out);
+    ugcheck_clean(&src, &m);
+}
+
+#[test]
+fn derived_names_avoid_input_names() {
+    let (src, mut m) = mesh(
+        "v a 0 0 0; v b 1 0 0; v c 1 1 0; v d 0 1 0; v a.1 5 5 5; v e 2 0 0;
+         f q (a b c d); f q.1 (b e c);",
+    );
+    let _ = m.split(ElemId(0));
+    let out = m.to_model(&src);
+    let mut names: Vec<&str> = out.vertices.iter().map(|v| v.name.as_str()).collect();
+    assert!(!names.contains(&"a.1"));
+    names.sort();
+    let n = names.len();
+    names.dedup();
+    assert_eq!(names.len(), n, "unique");
+    let fnames: Vec<&str> = out.faces.iter().filter_map(|f| f.name.as_deref()).collect();
+    assert!(!fnames[..4].contains(&"q.1"), "{fnames:?}");
+}
+
+#[test]
+fn deterministic() {
+    let run = || {
+        let (src, mut m) = mesh(&grid(3, 2));
+        let mut k = 7u32;
+        for _ in 0..40 {
+            let leaves: Vec<ElemId> = m.leaves().collect();
+            k = k.wrapping_mul(1_103_515_245).wrapping_add(12345);
+            m.split(leaves[(k >> 8) as usize % leaves.len()]);
+        }
+        ug::write_string(&m.to_model(&src))
+    };
+    assert_eq!(run(), run());
+}
+
+#[test]
+fn split_reports_all_new_vertices_in_id_order() {
+    let (_, mut m) = mesh(FLOOR_WALL);
+    let mut k = 3u32;
+    let mut out = Split::default();
+    for _ in 0..60 {
+        let leaves: Vec<ElemId> = m.leaves().collect();
+        k = k.wrapping_mul(1_103_515_245).wrapping_add(12345);
+        let e = leaves[(k >> 8) as usize % leaves.len()];
+        let before = m.num_vertices() as u32;
+        m.split_into(e, &mut out);
+        let ids: Vec<u32> = out.new_vertices.iter().map(|n| n.v.0).collect();
+        let want: Vec<u32> = (before..m.num_vertices() as u32).collect();
+        assert_eq!(ids, want);
+        for nv in &out.new_vertices {
+            for p in nv.parents {
+                assert!(p < nv.v);
+                assert_eq!(m.vertex_surface(p), m.vertex_surface(nv.v));
+            }
+        }
+        if !out.refined.is_empty() {
+            assert_eq!(out.refined[0], e);
+            assert!(out.refined.iter().all(|&r| !m.elem_is_leaf(r)));
+        }
+    }
+    m.validate().unwrap();
+}
