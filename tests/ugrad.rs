@@ -1,0 +1,203 @@
+//! ugrad end to end: the Cornell box through the cleaning chain, bad input,
+//! options, determinism.
+
+use std::process::Command;
+
+use ugkit::{assert_golden, bin, fixture, run, run_ok};
+
+/// ugplanar | ugcut -l LEN of a fixture.
+fn patches(name: &str, len: &str) -> String {
+    let planar = run_ok("ugplanar", &[fixture(name).to_str().unwrap()], None);
+    run_ok("ugcut", &["-l", len], Some(planar.as_bytes()))
+}
+
+fn colours(m: &ug::Model) -> Vec<[f64; 3]> {
+    m.vertices.iter().map(|v| m.material(v.color.expect("every vertex has a colour")).diffuse()).collect()
+}
+
+/// Area-weighted mean vertex colour per material, one line each (for a golden file).
+fn means(m: &ug::Model) -> String {
+    let col = colours(m);
+    let mut acc: Vec<(String, f64, [f64; 3])> = Vec::new();
+    for f in m.top_faces() {
+        let face = m.face(f);
+        let Some(mat) = face.material else { continue };
+        let name = m.material(mat).name.clone();
+        let c = &face.contours[0];
+        let p: Vec<glam::DVec3> = c.iter().map(|&v| m.pos(v)).collect();
+        let area = (1..p.len() - 1).map(|k| (p[k] - p[0]).cross(p[k + 1] - p[0]).length() / 2.0).sum::<f64>();
+        let mut mean = [0.0; 3];
+        for &v in c {
+            for k in 0..3 {
+                mean[k] += col[v.idx()][k] / c.len() as f64;
+            }
+        }
+        let slot = match acc.iter().position(|a| a.0 == name) {
+            Some(i) => i,
+            None => {
+                acc.push((name, 0.0, [0.0; 3]));
+                acc.len() - 1
+            }
+        };
+        acc[slot].1 += area;
+        for k in 0..3 {
+            acc[slot].2[k] += mean[k] * area;
+        }
+    }
+    acc.iter()
+        .map(|(n, a, s)| format!("{n} {:.6e} {:.6e} {:.6e}\n", s[0] / a, s[1] / a, s[2] / a))
+        .collect()
+}
+
+/// Compares two `means` texts value by value within a relative tolerance.
+fn assert_close(expected: &str, actual: &str, rel: f64) {
+    let (e, a): (Vec<&str>, Vec<&str>) = (expected.lines().collect(), actual.lines().collect());
+    assert_eq!(e.len(), a.len(), "expected\n{expected}actual\n{actual}");
+    for (x, y) in e.iter().zip(&a) {
+        let (xs, ys): (Vec<&str>, Vec<&str>) = (x.split(' ').collect(), y.split(' ').collect());
+        assert_eq!(xs[0], ys[0]);
+        for k in 1..4 {
+            let (p, q): (f64, f64) = (xs[k].parse().unwrap(), ys[k].parse().unwrap());
+            assert!((p - q).abs() <= rel * p.abs().max(q.abs()), "{x} vs {y}");
+        }
+    }
+}
+
+#[test]
+fn cornell_box_converges_with_shadows_and_refined_shadow_edges() {
+    let input = patches("cornell-box.ug", "120");
+    let out = run("ugrad", &["-v", "--converge", "0.05"], Some(input.as_bytes()));
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(err.contains("stopped (Converged)"), "{err}");
+    let text = String::from_utf8(out.stdout).unwrap();
+    let m = ug::parse(text.as_bytes(), "lit").unwrap().model;
+    let col = colours(&m);
+    // The output is a clean patch mesh.
+    let r: serde_json::Value = serde_json::from_str(&run_ok("ugcheck", &["--json"], Some(text.as_bytes()))).unwrap();
+    for key in ["tvertices", "degenerate", "inconsistent", "nonpatch"] {
+        assert_eq!(r[key].as_array().unwrap().len(), 0, "{key}");
+    }
+    // Walls colour the light they reflect.
+    let mean_of = |mat: &str| {
+        let id = m.material_by_name(mat).unwrap();
+        let vs: Vec<usize> = m
+            .top_faces()
+            .filter(|&f| m.face(f).material == Some(id))
+            .flat_map(|f| m.face(f).contours[0].iter().map(|v| v.idx()).collect::<Vec<_>>())
+            .collect();
+        let mut s = [0.0; 3];
+        for &v in &vs {
+            for k in 0..3 {
+                s[k] += col[v][k] / vs.len() as f64;
+            }
+        }
+        s
+    };
+    let (red, green, white) = (mean_of("red"), mean_of("green"), mean_of("white"));
+    assert!(red[0] > 3.0 * red[1], "red wall {red:?}");
+    assert!(green[1] > 1.5 * green[0], "green wall {green:?}");
+    assert!(white.iter().all(|&x| x > 0.0));
+    // The floor under the short block is enclosed by it: no light reaches it
+    // directly; vertices made by subdivision start from the mean of their
+    // parents (§6.2), so a little light spreads in from lit neighbours.
+    let inside_short = |x: f64, z: f64| {
+        let q = [(130.0, 65.0), (82.0, 225.0), (240.0, 272.0), (290.0, 114.0)];
+        (0..4).all(|i| {
+            let (a, b) = (q[i], q[(i + 1) % 4]);
+            (b.0 - a.0) * (z - a.1) - (b.1 - a.1) * (x - a.0) < -1.0
+        })
+    };
+    let floor: Vec<usize> = (0..m.vertices.len()).filter(|&v| m.vertices[v].pos.y == 0.0).collect();
+    let under: Vec<usize> = floor.iter().copied().filter(|&v| inside_short(m.vertices[v].pos.x, m.vertices[v].pos.z)).collect();
+    assert!(!under.is_empty());
+    let open: Vec<f64> = floor
+        .iter()
+        .filter(|&&v| !inside_short(m.vertices[v].pos.x, m.vertices[v].pos.z))
+        .map(|&v| col[v].iter().sum::<f64>())
+        .collect();
+    let open_mean = open.iter().sum::<f64>() / open.len() as f64;
+    for &v in &under {
+        let b: f64 = col[v].iter().sum();
+        assert!(b < 0.1 * open_mean, "floor vertex {} under the block: {b} vs open floor {open_mean}", m.vertices[v].name);
+    }
+    let exact_dark = under.iter().filter(|&&v| col[v] == [0.0; 3]).count();
+    assert!(2 * exact_dark >= under.len(), "{exact_dark} of {} vertices under the block are black", under.len());
+    // Adaptive subdivision concentrates small elements near the blocks' feet
+    // (where shadows begin) rather than in the open floor.
+    let near_block = |x: f64, z: f64| {
+        let (cs, ct) = ((185.0, 169.0), (368.0, 351.0));
+        ((x - cs.0).powi(2) + (z - cs.1).powi(2)).sqrt() < 160.0 || ((x - ct.0).powi(2) + (z - ct.1).powi(2)).sqrt() < 160.0
+    };
+    let (mut near, mut far) = ((0usize, 0.0f64), (0usize, 0.0f64));
+    for f in m.top_faces() {
+        let c = &m.face(f).contours[0];
+        let p: Vec<glam::DVec3> = c.iter().map(|&v| m.pos(v)).collect();
+        if p.iter().any(|q| q.y != 0.0) {
+            continue;
+        }
+        let cen = p.iter().copied().sum::<glam::DVec3>() / p.len() as f64;
+        let area = (1..p.len() - 1).map(|k| (p[k] - p[0]).cross(p[k + 1] - p[0]).length() / 2.0).sum::<f64>();
+        let slot = if near_block(cen.x, cen.z) { &mut near } else { &mut far };
+        slot.0 += 1;
+        slot.1 += area;
+    }
+    let (dn, df) = (near.0 as f64 / near.1, far.0 as f64 / far.1);
+    assert!(dn > 2.0 * df, "element density near the blocks {dn:e} vs elsewhere {df:e}");
+    // Tolerance-aware golden: area-weighted mean colour per material within 1e-6 relative.
+    let actual = means(&m);
+    let golden = "fixtures/rad/cornell-box.means";
+    if std::env::var_os("UPDATE_GOLDEN").is_some() {
+        assert_golden(golden, &actual);
+    } else {
+        let expected = std::fs::read_to_string(ugkit::root().join(golden)).expect("golden file");
+        assert_close(&expected, &actual, 1e-6);
+    }
+}
+
+#[test]
+fn faces_that_are_not_patches_are_refused() {
+    let out = run("ugrad", &[fixture("check/nonpatch.ug").to_str().unwrap()], None);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(out.stdout.is_empty());
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(err.contains("run ugcut first"), "{err}");
+}
+
+#[test]
+fn options_change_what_is_written() {
+    let input = patches("red-cube.ug", "0.5");
+    let full = run_ok("ugrad", &["--max-shots", "5"], Some(input.as_bytes()));
+    let irr = run_ok("ugrad", &["--max-shots", "5", "--output", "irradiance"], Some(input.as_bytes()));
+    let amb = run_ok("ugrad", &["--max-shots", "5", "--ambient"], Some(input.as_bytes()));
+    assert_ne!(full, irr);
+    assert_ne!(full, amb);
+    // The light's own vertices: radiosity includes its emission, irradiance does not.
+    let light_b = |t: &str| {
+        let m = ug::parse(t.as_bytes(), "o").unwrap().model;
+        let v = m.vertices.iter().find(|v| v.name == "l1").unwrap();
+        m.material(v.color.unwrap()).diffuse()
+    };
+    assert!(light_b(&full)[0] >= 5.0);
+    assert!(light_b(&irr)[0] < 5.0);
+    // A dark model: warning, all black, exit 0.
+    let dark = patches("check/clean-box.ug", "1");
+    let out = run("ugrad", &[], Some(dark.as_bytes()));
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("nothing in the model emits light"));
+}
+
+#[test]
+fn deterministic_at_any_thread_count() {
+    let input = patches("red-cube.ug", "0.5");
+    let path = std::env::temp_dir().join(format!("ugrad-det-{}.ug", std::process::id()));
+    std::fs::write(&path, &input).unwrap();
+    let go = |threads: &str| {
+        let out = Command::new(bin("ugrad")).args(["--max-shots", "30", path.to_str().unwrap()]).env("RAYON_NUM_THREADS", threads).output().unwrap();
+        assert!(out.status.success());
+        out.stdout
+    };
+    let (a, b) = (go("1"), go("2"));
+    let _ = std::fs::remove_file(&path);
+    assert!(a == b, "output differs between 1 and 2 threads");
+}
