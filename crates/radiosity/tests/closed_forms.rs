@@ -187,3 +187,39 @@ fn the_same_bits_at_any_thread_count() {
     };
     assert_eq!(run(1), run(3));
 }
+
+#[test]
+fn receivers_on_the_shooters_edge_get_the_limit_from_inside() {
+    // A 1 x 1 emitting wall standing on the edge of a 1 x 1 floor (a concave
+    // 90° corner): floor vertices on the shared edge lie on the shooter's
+    // edge, where the contour integral is discontinuous (§5.4). They must get
+    // the limit from inside the floor, not zero and not the value from behind.
+    let src = "defmat lamp; diffuse_rgb 0 0 0; emission_rgb 1 1 1; end;\n\
+               c_rgb floor 0.5 0.5 0.5;\n\
+               v a 0 0 0; v b 1 0 0; v c 1 1 0; v d 0 1 0; v e 0 1 1; v f 1 1 1;\n\
+               f floor (a b c d) floor;\n\
+               f wall (d c f e) lamp;";
+    let model = patches(src, 0.25);
+    let mesh = libmesh::Mesh::from_model(&model, 1e-9).unwrap();
+    let vis = RayVisibility::new(&mesh);
+    let opts = Options { max_shots: Some(16), gradient: Some(1e30), penumbra_energy: 1.0, ..Options::default() };
+    let mut solver = Solver::new(mesh, &model.materials, &vis, opts);
+    solver.solve(None, |_| {});
+    let wall: Vec<glam::DVec3> = [[0., 1., 0.], [1., 1., 0.], [1., 1., 1.], [0., 1., 1.]].map(glam::DVec3::from_array).to_vec();
+    let mut on_edge = 0;
+    for v in 0..solver.mesh.num_vertices() {
+        let v = libmesh::VertId(v as u32);
+        let p = solver.mesh.vertex_pos(v);
+        if solver.mesh.vertex_normal(v).z < 0.5 || (p.y - 1.0).abs() > 1e-12 {
+            continue; // floor vertices on the wall's foot only
+        }
+        // The limit from inside the floor (1e-9 away from the edge, toward the floor's middle).
+        let inside = p + (glam::DVec3::new(0.5, 0.5, 0.0) - p).normalize() * 1e-9;
+        let limit = radiosity::formfactor::point_to_polygon(inside, glam::DVec3::Z, &wall);
+        let h = solver.irradiance(v)[0];
+        assert!(limit > 0.1, "{p}: {limit}");
+        assert!((h - limit).abs() <= 1e-4 * limit, "floor vertex {p} on the wall's foot: H {h}, limit {limit}");
+        on_edge += 1;
+    }
+    assert_eq!(on_edge, 5);
+}
