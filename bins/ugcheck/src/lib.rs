@@ -637,8 +637,25 @@ fn t_vertices(cx: &Ctx<'_>, mesh: &winged::Mesh, geoms: &[Option<FaceGeom>]) -> 
 
 type PairLists = (Vec<Pair>, Vec<Overlap>, Vec<Pair>);
 
-fn pairs(cx: &Ctx<'_>, geoms: &[Option<FaceGeom>]) -> PairLists {
-    let eps = cx.eps;
+/// How two faces of a pair meet (see [`classify_pairs`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PairKind {
+    /// A common point lies inside one of them.
+    Intersect,
+    /// Coplanar and partly overlapping, with this common area.
+    Overlap(f64),
+    /// Coplanar, covering the same region, facing the same way.
+    Coincident,
+    /// Coplanar, covering the same region, facing opposite ways (a
+    /// zero-thickness wall's two sides): not a defect.
+    BackToBack,
+}
+
+/// Every pair (i < j) of faces that intersect or overlap, found with an
+/// R*-tree broad phase over the faces' boxes; `geoms[k]` is `None` for a
+/// degenerate face, which takes part in no pair. In order of (i, j), the same
+/// at any thread count.
+pub fn classify_pairs(geoms: &[Option<FaceGeom>], eps: f64) -> Vec<(usize, usize, PairKind)> {
     let boxes: Vec<(DVec3, DVec3, u32)> = geoms
         .iter()
         .enumerate()
@@ -650,12 +667,10 @@ fn pairs(cx: &Ctx<'_>, geoms: &[Option<FaceGeom>]) -> PairLists {
         })
         .collect();
     let index = BoxIndex::new(boxes.iter().copied());
-    let per: Vec<PairLists> = boxes
+    let per: Vec<Vec<(usize, usize, PairKind)>> = boxes
         .par_iter()
         .map(|&(lo, hi, i)| {
-            let mut inter = Vec::new();
-            let mut over = Vec::new();
-            let mut coin = Vec::new();
+            let mut out = Vec::new();
             let ga = geoms[i as usize]
                 .as_ref()
                 .expect("indexed faces have geometry");
@@ -666,9 +681,8 @@ fn pairs(cx: &Ctx<'_>, geoms: &[Option<FaceGeom>]) -> PairLists {
                 let gb = geoms[j as usize]
                     .as_ref()
                     .expect("indexed faces have geometry");
-                let (la, lb) = (cx.labels[i as usize].clone(), cx.labels[j as usize].clone());
-                match relate(ga, gb, eps) {
-                    Relation::Intersect => inter.push(Pair { a: la, b: lb }),
+                let kind = match relate(ga, gb, eps) {
+                    Relation::Intersect => Some(PairKind::Intersect),
                     Relation::Coplanar => {
                         let a2: &[Vec<DVec2>] = &ga.contours_2d;
                         let b2: Vec<Vec<DVec2>> = gb
@@ -677,37 +691,43 @@ fn pairs(cx: &Ctx<'_>, geoms: &[Option<FaceGeom>]) -> PairLists {
                             .map(|c| c.iter().map(|&p| ga.frame.to_2d(p)).collect())
                             .collect();
                         let ov = overlap_area(a2, &b2);
-                        let per_a: f64 = perimeter(a2);
-                        let per_b: f64 = perimeter(&b2);
-                        let tol = eps * (per_a + per_b);
+                        let tol = eps * (perimeter(a2) + perimeter(&b2));
                         if ov > tol {
                             let (area_a, area_b) = (region_area(a2), region_area(&b2));
                             let same_region =
                                 (area_a - ov).abs() <= tol && (area_b - ov).abs() <= tol;
                             let same_side = ga.plane.n.dot(gb.plane.n) > 0.0;
-                            if same_region && same_side {
-                                coin.push(Pair { a: la, b: lb });
-                            } else if !same_region {
-                                over.push(Overlap {
-                                    a: la,
-                                    b: lb,
-                                    area: ov,
-                                });
-                            }
-                            // Same region facing opposite ways: a thin wall's two sides; fine.
+                            Some(match (same_region, same_side) {
+                                (true, true) => PairKind::Coincident,
+                                (true, false) => PairKind::BackToBack,
+                                (false, _) => PairKind::Overlap(ov),
+                            })
+                        } else {
+                            None
                         }
                     }
-                    Relation::Disjoint | Relation::Touch => {}
+                    Relation::Disjoint | Relation::Touch => None,
+                };
+                if let Some(k) = kind {
+                    out.push((i as usize, j as usize, k));
                 }
             }
-            (inter, over, coin)
+            out
         })
         .collect();
+    per.into_iter().flatten().collect()
+}
+
+fn pairs(cx: &Ctx<'_>, geoms: &[Option<FaceGeom>]) -> PairLists {
     let mut out: PairLists = Default::default();
-    for (a, b, c) in per {
-        out.0.extend(a);
-        out.1.extend(b);
-        out.2.extend(c);
+    for (i, j, kind) in classify_pairs(geoms, cx.eps) {
+        let (a, b) = (cx.labels[i].clone(), cx.labels[j].clone());
+        match kind {
+            PairKind::Intersect => out.0.push(Pair { a, b }),
+            PairKind::Overlap(area) => out.1.push(Overlap { a, b, area }),
+            PairKind::Coincident => out.2.push(Pair { a, b }),
+            PairKind::BackToBack => {}
+        }
     }
     out
 }

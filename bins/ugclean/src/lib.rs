@@ -1,0 +1,194 @@
+//! Coincident face removal (Smith 1991, §2.6).
+//!
+//! Two faces are coincident when they are coplanar, cover the same region
+//! and face the same way (`ugcheck`'s definition; faces back to back — the
+//! two sides of a zero-thickness wall — are not). Of every coincident pair
+//! one face is removed:
+//!
+//! * same material: the later one in the file;
+//! * different materials: the piece that came from the larger original
+//!   surface (the floor under the rug, the desk under the paper), so that
+//!   what lies on top stays visible. The original surface's area is read from
+//!   an origin annotation — a comment `{ugcopl origin NAME area A}` just
+//!   before the face, which `ugcopl` writes for the pieces it cuts — and
+//!   otherwise measured: the area of the face's surface, the faces connected
+//!   to it through shared edges that are coplanar with it, of its material
+//!   and facing its way. Equal areas remove the later face.
+//!
+//! Vertices that only removed faces used are removed too.
+
+use geom::DVec3;
+use geom::intersect::FaceGeom;
+use ug::{FaceId, Item, Model};
+use ugcheck::PairKind;
+use winged::Mesh;
+
+/// What was removed and why.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Stats {
+    pub pairs: usize,
+    /// (removed face, kept face, reason)
+    pub removed: Vec<(String, String, String)>,
+    pub area_removed: f64,
+}
+
+fn label(m: &Model, k: usize, f: FaceId) -> String {
+    m.faces[f.idx()]
+        .name
+        .clone()
+        .unwrap_or_else(|| format!("#{}", k + 1))
+}
+
+/// The origin annotations: face → original surface area.
+fn origins(m: &Model) -> Vec<Option<f64>> {
+    let mut out = vec![None; m.faces.len()];
+    let mut pending: Option<f64> = None;
+    for it in &m.items {
+        match it {
+            Item::Comment(c) => {
+                let w: Vec<&str> = c.split_whitespace().collect();
+                pending = match w.as_slice() {
+                    ["ugcopl", "origin", _, "area", a] => {
+                        a.parse::<f64>().ok().filter(|x| x.is_finite())
+                    }
+                    _ => None,
+                };
+            }
+            Item::Face(f) => {
+                out[f.idx()] = pending.take();
+            }
+            _ => pending = None,
+        }
+    }
+    out
+}
+
+/// Area of the connected coplanar same-material surface a face belongs to.
+fn surface_area(mesh: &Mesh, f: FaceId, eps: f64) -> f64 {
+    let Some(plane) = mesh.face_plane(f) else {
+        return 0.0;
+    };
+    let mat = mesh.face(f).material;
+    let same = |g: FaceId| -> bool {
+        if mesh.face(g).material != mat {
+            return false;
+        }
+        let Some(pg) = mesh.face_plane(g) else {
+            return false;
+        };
+        pg.n.dot(plane.n) > 0.0
+            && mesh
+                .face_points(g)
+                .iter()
+                .flatten()
+                .all(|&p| plane.dist(p).abs() <= eps)
+    };
+    let mut seen = vec![f];
+    let mut k = 0;
+    while k < seen.len() {
+        let g = seen[k];
+        k += 1;
+        for h in mesh.face_neighbors(g) {
+            if !seen.contains(&h) && same(h) {
+                seen.push(h);
+            }
+        }
+    }
+    seen.iter().map(|&g| mesh.face_area(g).abs()).sum()
+}
+
+/// Removes one face of every coincident pair of a flat model.
+pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
+    let faces: Vec<FaceId> = m.top_faces().collect();
+    let points = |f: FaceId| -> Vec<Vec<DVec3>> {
+        m.faces[f.idx()]
+            .contours
+            .iter()
+            .map(|c| c.iter().map(|&v| m.pos(v)).collect())
+            .collect()
+    };
+    let geoms: Vec<Option<FaceGeom>> = faces.iter().map(|&f| FaceGeom::new(points(f))).collect();
+    let pairs: Vec<(usize, usize)> = ugcheck::classify_pairs(&geoms, eps)
+        .into_iter()
+        .filter(|p| p.2 == PairKind::Coincident)
+        .map(|(i, j, _)| (i, j))
+        .collect();
+    let mut stats = Stats {
+        pairs: pairs.len(),
+        ..Stats::default()
+    };
+    if pairs.is_empty() {
+        return (m.clone(), stats);
+    }
+    let origin = origins(m);
+    let mesh = Mesh::from_model(m.clone());
+    let mut removed = vec![false; m.faces.len()];
+    for (i, j) in pairs {
+        let (a, b) = (faces[i], faces[j]);
+        if removed[a.idx()] || removed[b.idx()] {
+            continue;
+        }
+        let (ma, mb) = (m.faces[a.idx()].material, m.faces[b.idx()].material);
+        let (loser, winner, reason) = if ma == mb {
+            (j, i, "same material: the later face goes".to_string())
+        } else {
+            let area = |_: usize, f: FaceId| {
+                origin[f.idx()].unwrap_or_else(|| surface_area(&mesh, f, eps))
+            };
+            let (sa, sb) = (area(i, a), area(j, b));
+            if sa > sb {
+                (i, j, format!("its surface is larger ({sa} > {sb})"))
+            } else {
+                (
+                    j,
+                    i,
+                    format!("its surface is larger or as large ({sb} ≥ {sa})"),
+                )
+            }
+        };
+        let lf = faces[loser];
+        removed[lf.idx()] = true;
+        stats.area_removed += geom::face_area(&points(lf)).abs();
+        stats
+            .removed
+            .push((label(m, loser, lf), label(m, winner, faces[winner]), reason));
+    }
+    // Vertices still used by a face or wire.
+    let mut used = vec![false; m.vertices.len()];
+    let mut was_used = vec![false; m.vertices.len()];
+    for &f in &faces {
+        for &v in m.faces[f.idx()].contours.iter().flatten() {
+            was_used[v.idx()] = true;
+            if !removed[f.idx()] {
+                used[v.idx()] = true;
+            }
+        }
+    }
+    for w in &m.wires {
+        for &v in w.polylines.iter().flatten() {
+            used[v.idx()] = true;
+        }
+    }
+    let mut out = m.clone();
+    out.items.retain(|it| match it {
+        Item::Face(f) => !removed[f.idx()],
+        Item::Vertex(v) => used[v.idx()] || !was_used[v.idx()],
+        _ => true,
+    });
+    // Origin annotations of removed faces go too.
+    let mut keep = vec![true; out.items.len()];
+    for k in 0..out.items.len() {
+        if let Item::Comment(c) = &out.items[k]
+            && c.trim_start().starts_with("ugcopl origin")
+            && !matches!(out.items.get(k + 1), Some(Item::Face(_)))
+        {
+            keep[k] = false;
+        }
+    }
+    let mut k = 0;
+    out.items.retain(|_| {
+        k += 1;
+        keep[k - 1]
+    });
+    (out, stats)
+}
