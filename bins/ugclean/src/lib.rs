@@ -63,8 +63,10 @@ fn origins(m: &Model) -> Vec<Option<f64>> {
     out
 }
 
-/// Area of the connected coplanar same-material surface a face belongs to.
-fn surface_area(mesh: &Mesh, f: FaceId, eps: f64) -> f64 {
+/// Area of the connected coplanar same-material surface a face belongs to
+/// (faces reached through shared edges, same material and orientation, all
+/// vertices within `eps` of the face's plane).
+pub fn surface_area(mesh: &Mesh, f: FaceId, eps: f64) -> f64 {
     let Some(plane) = mesh.face_plane(f) else {
         return 0.0;
     };

@@ -60,6 +60,23 @@ mod tests {
     }
 
     #[test]
+    fn split_by_makes_the_overlap_a_piece() {
+        let pieces = split_by(&[sq(0., 0., 2.)], &[vec![sq(1., 1., 2.)]], 1e-12);
+        assert_eq!(pieces.len(), 2);
+        let areas: Vec<f64> = pieces.iter().map(|p| region_area(p)).collect();
+        assert!(
+            (areas[0] - 1.0).abs() < 1e-12 && (areas[1] - 3.0).abs() < 1e-12,
+            "{areas:?}"
+        );
+        // A square cut by a smaller one inside it: a piece with a hole and the inner piece.
+        let pieces = split_by(&[sq(0., 0., 4.)], &[vec![sq(1., 1., 1.)]], 1e-12);
+        assert_eq!(pieces.len(), 2);
+        assert_eq!(pieces.iter().map(|p| p.len()).collect::<Vec<_>>(), [1, 2]);
+        assert!(crate::polygon::signed_area_2d(&pieces[1][0]) > 0.0);
+        assert!(crate::polygon::signed_area_2d(&pieces[1][1]) < 0.0);
+    }
+
+    #[test]
     fn holes_and_islands() {
         let mut hole = sq(2., 2., 6.);
         hole.reverse();
@@ -69,4 +86,59 @@ mod tests {
         assert!(overlap_area(&face, &[sq(2.5, 2.5, 1.0)]) < 1e-12);
         assert!((overlap_area(&face, &[sq(4.5, 4.5, 1.0)]) - 1.0).abs() < 1e-12);
     }
+}
+
+/// Cuts the region of `a` by each of `others` in turn: every piece is split
+/// into its part inside and its part outside the next region. Returns the
+/// pieces as polygons with holes (outer contour counter-clockwise, holes
+/// clockwise; islands are separate pieces), dropping slivers with area below
+/// `min_area`. Pieces that lie in the same set of `others` are the same region
+/// for every face cut this way, which is what makes a coplanar overlap a
+/// separate face in each face it belongs to.
+pub fn split_by(
+    a: &[Vec<DVec2>],
+    others: &[Vec<Vec<DVec2>>],
+    min_area: f64,
+) -> Vec<Vec<Vec<DVec2>>> {
+    let mut pieces = vec![region(a)];
+    for o in others {
+        let ro = region(o);
+        if ro.0.is_empty() {
+            continue;
+        }
+        let mut next = Vec::with_capacity(pieces.len() * 2);
+        for p in pieces {
+            for part in [p.intersection(&ro), p.difference(&ro)] {
+                if part.unsigned_area() > min_area {
+                    next.push(part);
+                }
+            }
+        }
+        pieces = next;
+    }
+    let ring = |ls: &LineString<f64>, ccw: bool| -> Vec<DVec2> {
+        let mut pts: Vec<DVec2> = ls.0.iter().map(|c| DVec2::new(c.x, c.y)).collect();
+        if pts.len() > 1 && pts.first() == pts.last() {
+            pts.pop();
+        }
+        let s: f64 = (0..pts.len())
+            .map(|i| pts[i].perp_dot(pts[(i + 1) % pts.len()]))
+            .sum();
+        if (s > 0.0) != ccw {
+            pts.reverse();
+        }
+        pts
+    };
+    let mut out = Vec::new();
+    for mp in pieces {
+        for poly in mp.0 {
+            if poly.unsigned_area() <= min_area {
+                continue;
+            }
+            let mut contours = vec![ring(poly.exterior(), true)];
+            contours.extend(poly.interiors().iter().map(|h| ring(h, false)));
+            out.push(contours);
+        }
+    }
+    out
 }
