@@ -156,6 +156,17 @@ pub fn copl(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
             })
             .sum();
         let pieces = split_by(&g.contours_2d, &cutters, eps * perim);
+        // Exact f64 positions for the points the booleans rounded: on the
+        // face's edges and the other faces' edges.
+        let features: Vec<(DVec2, DVec2)> = g
+            .contours_2d
+            .iter()
+            .chain(cutters.iter().flatten())
+            .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
+            .collect();
+        let (blo, bhi) =
+            geom::index::bbox(g.contours_2d.iter().flatten().map(|p| p.extend(0.0)), 0.0);
+        let tol = 1e-6 * (bhi - blo).length().max(eps);
         if pieces.len() <= 1 {
             push(&mut out, face.clone());
             continue;
@@ -170,7 +181,9 @@ pub fn copl(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
             for ring in piece {
                 let mut c: Vec<VertexId> = Vec::with_capacity(ring.len());
                 for p2 in ring {
-                    let p = g.frame.to_3d(p2);
+                    let p = g
+                        .frame
+                        .to_3d(geom::overlap::refine_point(p2, &features, tol));
                     let v = match pts.find(&out.vertices, p) {
                         Some(v) => v,
                         None => {

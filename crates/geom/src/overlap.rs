@@ -142,3 +142,50 @@ pub fn split_by(
     }
     out
 }
+
+/// Moves a point that polygon booleans computed (they round to a fixed-point
+/// grid internally, ~1e-9 of the extent) back onto the exact intersection of
+/// the features it was made from: among `segments`, those whose lines pass
+/// within `tol` of the point (and that reach it, within `tol`), the two that
+/// cross at the largest angle are intersected in f64; with one, the point is
+/// projected onto it; with none it stays.
+pub fn refine_point(p: DVec2, segments: &[(DVec2, DVec2)], tol: f64) -> DVec2 {
+    let mut near: Vec<(DVec2, DVec2)> = Vec::new();
+    for &(a, b) in segments {
+        let d = b - a;
+        let l2 = d.length_squared();
+        if l2 == 0.0 {
+            continue;
+        }
+        let t = (p - a).dot(d) / l2;
+        let l = l2.sqrt();
+        if t * l < -tol || (t - 1.0) * l > tol {
+            continue;
+        }
+        if (p - a).perp_dot(d).abs() / l <= tol {
+            near.push((a, d / l));
+        }
+    }
+    let mut best: Option<(f64, DVec2)> = None;
+    for i in 0..near.len() {
+        for j in i + 1..near.len() {
+            let (a, u) = near[i];
+            let (b, v) = near[j];
+            let s = u.perp_dot(v);
+            if s.abs() < 1e-9 {
+                continue;
+            }
+            let x = a + u * ((b - a).perp_dot(v) / s);
+            if (x - p).length() <= 2.0 * tol && best.is_none_or(|(bs, _)| s.abs() > bs) {
+                best = Some((s.abs(), x));
+            }
+        }
+    }
+    if let Some((_, x)) = best {
+        return x;
+    }
+    if let Some(&(a, u)) = near.first() {
+        return a + u * (p - a).dot(u);
+    }
+    p
+}

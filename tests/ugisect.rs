@@ -1,0 +1,143 @@
+//! ugisect end to end: no intersecting pair and no T-vertex afterwards, area
+//! kept, on hand-made dirt and on random quads.
+
+use ugkit::{fixture, run_ok};
+
+fn check(text: &str) -> serde_json::Value {
+    serde_json::from_str(&run_ok("ugcheck", &["--json"], Some(text.as_bytes()))).unwrap()
+}
+
+fn count(r: &serde_json::Value, key: &str) -> usize {
+    r[key].as_array().unwrap().len()
+}
+
+fn assert_cut(name: &str, src: &str) -> String {
+    let before = check(src);
+    let out = run_ok("ugisect", &[], Some(src.as_bytes()));
+    let after = check(&out);
+    for key in [
+        "intersecting",
+        "tvertices",
+        "degenerate",
+        "nonplanar",
+        "inconsistent",
+    ] {
+        assert_eq!(
+            count(&after, key),
+            0,
+            "{name}: {key} after ugisect: {}\n{out}",
+            after[key]
+        );
+    }
+    let (a, b) = (
+        before["area_by_material"].as_array().unwrap(),
+        after["area_by_material"].as_array().unwrap(),
+    );
+    assert_eq!(a.len(), b.len());
+    for (x, y) in a.iter().zip(b) {
+        let (x, y) = (x["area"].as_f64().unwrap(), y["area"].as_f64().unwrap());
+        assert!((x - y).abs() <= 1e-9 * x, "{name}: area {x} → {y}");
+    }
+    out
+}
+
+#[test]
+fn dirty_fixtures_come_out_without_intersections() {
+    for name in [
+        "check/intersect.ug",
+        "check/wall-on-floor.ug",
+        "isect/leg-through-floor.ug",
+        "isect/wall-slabs.ug",
+    ] {
+        let src = std::fs::read_to_string(fixture(name)).unwrap();
+        assert!(count(&check(&src), "intersecting") > 0, "{name}");
+        let out = assert_cut(name, &src);
+        // Idempotent.
+        assert_eq!(
+            run_ok("ugisect", &[], Some(out.as_bytes())),
+            run_ok("ugcat", &[], Some(out.as_bytes())),
+            "{name}"
+        );
+    }
+}
+
+#[test]
+fn the_floor_is_cut_along_the_walls_foot() {
+    let src = std::fs::read_to_string(fixture("check/wall-on-floor.ug")).unwrap();
+    let out = assert_cut("wall-on-floor", &src);
+    let m = ug::parse(out.as_bytes(), "o").unwrap().model;
+    // The wall stays whole; the floor is two pieces sharing the foot's line,
+    // and both foot corners are vertices of both floor pieces.
+    let names: Vec<String> = m
+        .top_faces()
+        .map(|f| m.face(f).name.clone().unwrap())
+        .collect();
+    assert_eq!(names, ["floor.i1", "floor.i2", "wall"]);
+    for f in m.top_faces().take(2) {
+        let vs: Vec<&str> = m.face(f).contours[0]
+            .iter()
+            .map(|&v| m.vertex(v).name.as_str())
+            .collect();
+        assert!(vs.contains(&"w0") && vs.contains(&"w1"), "{vs:?}");
+    }
+}
+
+#[test]
+fn the_whole_cleaning_chain_on_the_cornell_box_and_the_slabs() {
+    for name in ["cornell-box.ug", "isect/wall-slabs.ug"] {
+        let p = fixture(name);
+        let planar = run_ok("ugplanar", &[p.to_str().unwrap()], None);
+        let merged = run_ok("ugvlmerge", &[], Some(planar.as_bytes()));
+        let cut = assert_cut(name, &merged);
+        let copl = run_ok("ugcopl", &[], Some(cut.as_bytes()));
+        let clean = run_ok("ugclean", &[], Some(copl.as_bytes()));
+        let r = check(&clean);
+        for key in [
+            "intersecting",
+            "overlapping",
+            "coincident",
+            "tvertices",
+            "degenerate",
+            "nonplanar",
+        ] {
+            assert_eq!(count(&r, key), 0, "{name}: {key} after the chain");
+        }
+    }
+}
+
+#[test]
+fn random_crossing_quads() {
+    // Seeded pseudo-random pairs and triples of quads in general position.
+    let mut seed = 0x2545F4914F6CDD1Du64;
+    let mut rnd = || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for case in 0..20 {
+        let mut src = String::from("c_rgb g 0.5 0.5 0.5;\n");
+        for q in 0..3 {
+            // A random rectangle: centre, two orthogonal half-axes.
+            let c = [rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0];
+            let a = [rnd() - 0.5, rnd() - 0.5, rnd() - 0.5];
+            let t = [rnd() - 0.5, rnd() - 0.5, rnd() - 0.5];
+            let dot = a[0] * t[0] + a[1] * t[1] + a[2] * t[2];
+            let aa = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+            let b = [
+                t[0] - a[0] * dot / aa,
+                t[1] - a[1] * dot / aa,
+                t[2] - a[2] * dot / aa,
+            ];
+            for (k, (s, u)) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                .iter()
+                .enumerate()
+            {
+                let p: Vec<f64> = (0..3).map(|i| c[i] + 2.0 * (s * a[i] + u * b[i])).collect();
+                src.push_str(&format!("v q{q}_{k} {} {} {};\n", p[0], p[1], p[2]));
+            }
+            src.push_str(&format!("f r{q} (q{q}_0 q{q}_1 q{q}_2 q{q}_3) g;\n"));
+        }
+        assert_cut(&format!("random case {case}"), &src);
+    }
+}
