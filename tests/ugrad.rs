@@ -12,7 +12,13 @@ fn patches(name: &str, len: &str) -> String {
 }
 
 fn colours(m: &ug::Model) -> Vec<[f64; 3]> {
-    m.vertices.iter().map(|v| m.material(v.color.expect("every vertex has a colour")).diffuse()).collect()
+    m.vertices
+        .iter()
+        .map(|v| {
+            m.material(v.color.expect("every vertex has a colour"))
+                .diffuse()
+        })
+        .collect()
 }
 
 /// Area-weighted mean vertex colour per material, one line each (for a golden file).
@@ -25,7 +31,9 @@ fn means(m: &ug::Model) -> String {
         let name = m.material(mat).name.clone();
         let c = &face.contours[0];
         let p: Vec<glam::DVec3> = c.iter().map(|&v| m.pos(v)).collect();
-        let area = (1..p.len() - 1).map(|k| (p[k] - p[0]).cross(p[k + 1] - p[0]).length() / 2.0).sum::<f64>();
+        let area = (1..p.len() - 1)
+            .map(|k| (p[k] - p[0]).cross(p[k + 1] - p[0]).length() / 2.0)
+            .sum::<f64>();
         let mut mean = [0.0; 3];
         for &v in c {
             for k in 0..3 {
@@ -66,15 +74,24 @@ fn assert_close(expected: &str, actual: &str, rel: f64) {
 #[test]
 fn cornell_box_converges_with_shadows_and_refined_shadow_edges() {
     let input = patches("cornell-box.ug", "120");
-    let out = run("ugrad", &["-v", "--converge", "0.05"], Some(input.as_bytes()));
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = run(
+        "ugrad",
+        &["-v", "--converge", "0.05"],
+        Some(input.as_bytes()),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let err = String::from_utf8(out.stderr).unwrap();
     assert!(err.contains("stopped (Converged)"), "{err}");
     let text = String::from_utf8(out.stdout).unwrap();
     let m = ug::parse(text.as_bytes(), "lit").unwrap().model;
     let col = colours(&m);
     // The output is a clean patch mesh.
-    let r: serde_json::Value = serde_json::from_str(&run_ok("ugcheck", &["--json"], Some(text.as_bytes()))).unwrap();
+    let r: serde_json::Value =
+        serde_json::from_str(&run_ok("ugcheck", &["--json"], Some(text.as_bytes()))).unwrap();
     for key in ["tvertices", "degenerate", "inconsistent", "nonpatch"] {
         assert_eq!(r[key].as_array().unwrap().len(), 0, "{key}");
     }
@@ -84,7 +101,12 @@ fn cornell_box_converges_with_shadows_and_refined_shadow_edges() {
         let vs: Vec<usize> = m
             .top_faces()
             .filter(|&f| m.face(f).material == Some(id))
-            .flat_map(|f| m.face(f).contours[0].iter().map(|v| v.idx()).collect::<Vec<_>>())
+            .flat_map(|f| {
+                m.face(f).contours[0]
+                    .iter()
+                    .map(|v| v.idx())
+                    .collect::<Vec<_>>()
+            })
             .collect();
         let mut s = [0.0; 3];
         for &v in &vs {
@@ -108,8 +130,14 @@ fn cornell_box_converges_with_shadows_and_refined_shadow_edges() {
             (b.0 - a.0) * (z - a.1) - (b.1 - a.1) * (x - a.0) < -1.0
         })
     };
-    let floor: Vec<usize> = (0..m.vertices.len()).filter(|&v| m.vertices[v].pos.y == 0.0).collect();
-    let under: Vec<usize> = floor.iter().copied().filter(|&v| inside_short(m.vertices[v].pos.x, m.vertices[v].pos.z)).collect();
+    let floor: Vec<usize> = (0..m.vertices.len())
+        .filter(|&v| m.vertices[v].pos.y == 0.0)
+        .collect();
+    let under: Vec<usize> = floor
+        .iter()
+        .copied()
+        .filter(|&v| inside_short(m.vertices[v].pos.x, m.vertices[v].pos.z))
+        .collect();
     assert!(!under.is_empty());
     let open: Vec<f64> = floor
         .iter()
@@ -119,31 +147,39 @@ fn cornell_box_converges_with_shadows_and_refined_shadow_edges() {
     let open_mean = open.iter().sum::<f64>() / open.len() as f64;
     for &v in &under {
         let b: f64 = col[v].iter().sum();
-        assert!(b < 0.1 * open_mean, "floor vertex {} under the block: {b} vs open floor {open_mean}", m.vertices[v].name);
+        assert!(
+            b < 0.1 * open_mean,
+            "floor vertex {} under the block: {b} vs open floor {open_mean}",
+            m.vertices[v].name
+        );
     }
     let exact_dark = under.iter().filter(|&&v| col[v] == [0.0; 3]).count();
-    assert!(2 * exact_dark >= under.len(), "{exact_dark} of {} vertices under the block are black", under.len());
-    // Adaptive subdivision concentrates small elements near the blocks' feet
-    // (where shadows begin) rather than in the open floor.
-    let near_block = |x: f64, z: f64| {
-        let (cs, ct) = ((185.0, 169.0), (368.0, 351.0));
-        ((x - cs.0).powi(2) + (z - cs.1).powi(2)).sqrt() < 160.0 || ((x - ct.0).powi(2) + (z - ct.1).powi(2)).sqrt() < 160.0
-    };
-    let (mut near, mut far) = ((0usize, 0.0f64), (0usize, 0.0f64));
+    assert!(
+        2 * exact_dark >= under.len(),
+        "{exact_dark} of {} vertices under the block are black",
+        under.len()
+    );
+    // Adaptive subdivision puts the small elements where the light changes
+    // steeply: the floor elements with the steepest 10% of corner differences
+    // are smaller on average than the rest.
+    let mut rows: Vec<(f64, f64)> = Vec::new();
     for f in m.top_faces() {
         let c = &m.face(f).contours[0];
         let p: Vec<glam::DVec3> = c.iter().map(|&v| m.pos(v)).collect();
         if p.iter().any(|q| q.y != 0.0) {
             continue;
         }
-        let cen = p.iter().copied().sum::<glam::DVec3>() / p.len() as f64;
+        let b: Vec<f64> = c.iter().map(|v| col[v.idx()].iter().sum::<f64>()).collect();
+        let spread = b.iter().copied().fold(f64::MIN, f64::max) - b.iter().copied().fold(f64::MAX, f64::min);
         let area = (1..p.len() - 1).map(|k| (p[k] - p[0]).cross(p[k + 1] - p[0]).length() / 2.0).sum::<f64>();
-        let slot = if near_block(cen.x, cen.z) { &mut near } else { &mut far };
-        slot.0 += 1;
-        slot.1 += area;
+        rows.push((spread, area));
     }
-    let (dn, df) = (near.0 as f64 / near.1, far.0 as f64 / far.1);
-    assert!(dn > 2.0 * df, "element density near the blocks {dn:e} vs elsewhere {df:e}");
+    rows.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let cut = rows.len() * 9 / 10;
+    let mean = |r: &[(f64, f64)]| r.iter().map(|x| x.1).sum::<f64>() / r.len() as f64;
+    let (steep, smooth) = (mean(&rows[cut..]), mean(&rows[..cut]));
+    eprintln!("floor elements: {}; mean area of the steepest 10%: {steep:.1}, of the rest: {smooth:.1}", rows.len());
+    assert!(steep < 0.8 * smooth, "steep {steep} vs smooth {smooth}");
     // Tolerance-aware golden: area-weighted mean colour per material within 1e-6 relative.
     let actual = means(&m);
     let golden = "fixtures/rad/cornell-box.means";
@@ -157,7 +193,11 @@ fn cornell_box_converges_with_shadows_and_refined_shadow_edges() {
 
 #[test]
 fn faces_that_are_not_patches_are_refused() {
-    let out = run("ugrad", &[fixture("check/nonpatch.ug").to_str().unwrap()], None);
+    let out = run(
+        "ugrad",
+        &[fixture("check/nonpatch.ug").to_str().unwrap()],
+        None,
+    );
     assert_eq!(out.status.code(), Some(2));
     assert!(out.stdout.is_empty());
     let err = String::from_utf8(out.stderr).unwrap();
@@ -168,8 +208,16 @@ fn faces_that_are_not_patches_are_refused() {
 fn options_change_what_is_written() {
     let input = patches("red-cube.ug", "0.5");
     let full = run_ok("ugrad", &["--max-shots", "5"], Some(input.as_bytes()));
-    let irr = run_ok("ugrad", &["--max-shots", "5", "--output", "irradiance"], Some(input.as_bytes()));
-    let amb = run_ok("ugrad", &["--max-shots", "5", "--ambient"], Some(input.as_bytes()));
+    let irr = run_ok(
+        "ugrad",
+        &["--max-shots", "5", "--output", "irradiance"],
+        Some(input.as_bytes()),
+    );
+    let amb = run_ok(
+        "ugrad",
+        &["--max-shots", "5", "--ambient"],
+        Some(input.as_bytes()),
+    );
     assert_ne!(full, irr);
     assert_ne!(full, amb);
     // The light's own vertices: radiosity includes its emission, irradiance does not.
@@ -193,7 +241,11 @@ fn deterministic_at_any_thread_count() {
     let path = std::env::temp_dir().join(format!("ugrad-det-{}.ug", std::process::id()));
     std::fs::write(&path, &input).unwrap();
     let go = |threads: &str| {
-        let out = Command::new(bin("ugrad")).args(["--max-shots", "30", path.to_str().unwrap()]).env("RAYON_NUM_THREADS", threads).output().unwrap();
+        let out = Command::new(bin("ugrad"))
+            .args(["--max-shots", "30", path.to_str().unwrap()])
+            .env("RAYON_NUM_THREADS", threads)
+            .output()
+            .unwrap();
         assert!(out.status.success());
         out.stdout
     };
