@@ -68,9 +68,9 @@ fn assert_good_patches(name: &str, input: &[u8], len: f64) -> String {
         let (x, y) = (x["area"].as_f64().unwrap(), y["area"].as_f64().unwrap());
         assert!((x - y).abs() <= 1e-9 * x, "{name}: area {x} → {y}");
     }
-    // Patch edges within a factor of LEN (0.4–1.5) and no triangle angle below 20°.
+    // Patch edges within a factor of LEN (0.4–1.6) and no triangle angle below 20°.
     assert!(
-        min >= 0.4 * len && max <= 1.5 * len,
+        min >= 0.4 * len && max <= 1.6 * len,
         "{name}: edges {min}..{max} for LEN {len}"
     );
     assert!(
@@ -174,4 +174,31 @@ fn output_is_deterministic() {
     let a = run_ok("ugcut", &["-l", "0.7", p.to_str().unwrap()], None);
     let b = run_ok("ugcut", &["-l", "0.7", p.to_str().unwrap()], None);
     assert_eq!(a, b);
+}
+
+#[test]
+fn collinear_boundary_vertices_and_thin_strips_keep_their_area() {
+    // Regressions from Soda Hall: a grid cell whose edge lay along a boundary
+    // segment running past its corner was accepted and covered a notch or
+    // left a gap (area −1,738 in² on floor 5).
+    for name in ["extra-vertices", "comb"] {
+        let src = std::fs::read_to_string(fixture(&format!("cut/{name}.ug"))).unwrap();
+        let before = check(&src);
+        let out = run_ok("ugcut", &["-l", "1"], Some(src.as_bytes()));
+        let after = check(&out);
+        for key in [
+            "nonpatch",
+            "tvertices",
+            "degenerate",
+            "overlapping",
+            "intersecting",
+        ] {
+            assert_eq!(count(&after, key), 0, "{name}: {key}");
+        }
+        let (a, b) = (
+            before["area_by_material"][0]["area"].as_f64().unwrap(),
+            after["area_by_material"][0]["area"].as_f64().unwrap(),
+        );
+        assert!((a - b).abs() <= 1e-9 * a, "{name}: area {a} → {b}");
+    }
 }

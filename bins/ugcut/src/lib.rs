@@ -585,9 +585,16 @@ fn cell_ok(
             return false;
         }
     }
+    // A segment leaving corner c along a grid line, away from the cell (not
+    // along one of the cell's own edges, which would put the cell's next
+    // corner inside the segment).
     let on_edge_line = |c: usize, q: DVec2| {
         let p = corners[c];
-        (q.x - p.x).abs() <= eps || (q.y - p.y).abs() <= eps
+        let d = q - p;
+        let along = (d.x).abs() <= eps || (d.y).abs() <= eps;
+        let outward =
+            d.dot(corners[(c + 1) % 4] - p) <= 0.0 && d.dot(corners[(c + 3) % 4] - p) <= 0.0;
+        along && outward
     };
     for k in seg_index.query(lo, hi) {
         let (p, q) = segs[k as usize];

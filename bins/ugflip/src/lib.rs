@@ -498,7 +498,7 @@ fn encloses(
     }
     probes.extend(opts.viewpoints.iter().copied());
     probes.extend(opts.bombs.iter().copied());
-    let dir = DVec3::new(0.318_309_886, 0.718_281_828, 0.618_033_988).normalize();
+    let dir = DVec3::new(0.302_775_637, 0.723_606_798, 0.620_349_731).normalize();
     probes
         .into_iter()
         .filter(|p| p.cmpge(lo).all() && p.cmple(hi).all())

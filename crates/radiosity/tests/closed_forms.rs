@@ -202,10 +202,17 @@ fn receivers_on_the_shooters_edge_get_the_limit_from_inside() {
     let model = patches(src, 0.25);
     let mesh = libmesh::Mesh::from_model(&model, 1e-9).unwrap();
     let vis = RayVisibility::new(&mesh);
-    let opts = Options { max_shots: Some(16), gradient: Some(1e30), penumbra_energy: 1.0, ..Options::default() };
+    let opts = Options {
+        max_shots: Some(16),
+        gradient: Some(1e30),
+        penumbra_energy: 1.0,
+        ..Options::default()
+    };
     let mut solver = Solver::new(mesh, &model.materials, &vis, opts);
     solver.solve(None, |_| {});
-    let wall: Vec<glam::DVec3> = [[0., 1., 0.], [1., 1., 0.], [1., 1., 1.], [0., 1., 1.]].map(glam::DVec3::from_array).to_vec();
+    let wall: Vec<glam::DVec3> = [[0., 1., 0.], [1., 1., 0.], [1., 1., 1.], [0., 1., 1.]]
+        .map(glam::DVec3::from_array)
+        .to_vec();
     let mut on_edge = 0;
     for v in 0..solver.mesh.num_vertices() {
         let v = libmesh::VertId(v as u32);
@@ -218,7 +225,10 @@ fn receivers_on_the_shooters_edge_get_the_limit_from_inside() {
         let limit = radiosity::formfactor::point_to_polygon(inside, glam::DVec3::Z, &wall);
         let h = solver.irradiance(v)[0];
         assert!(limit > 0.1, "{p}: {limit}");
-        assert!((h - limit).abs() <= 1e-4 * limit, "floor vertex {p} on the wall's foot: H {h}, limit {limit}");
+        assert!(
+            (h - limit).abs() <= 1e-4 * limit,
+            "floor vertex {p} on the wall's foot: H {h}, limit {limit}"
+        );
         on_edge += 1;
     }
     assert_eq!(on_edge, 5);

@@ -1,0 +1,155 @@
+//! ugbuilding: a generated building model, for benchmarks and experiments.
+
+use clap::{CommandFactory, FromArgMatches, Parser};
+
+const EXAMPLES: &str = "\
+Examples:
+  ugbuilding --rooms 10 > clean.ug                      a clean 10 × 10 grid of rooms (940 faces)
+  ugbuilding --faces 10000 --messy --seed 7 -o m.ug     about 10,000 faces with every kind of dirt
+  ugbuilding --faces 1000 --nonplanar 0.2 | ugplanar -v   20% of the faces non-planar
+  ugbuilding --rooms 3 --lights --furniture 2 | ugcheck   lit, furnished rooms; furniture stands on the floors
+  ugbuilding --faces 10000 --messy | ugplanar | ugflip | ugvlmerge | ugcut -l 1 | ugrad --max-shots 100";
+
+/// Generate a CAD-like building as UniGrafix: a grid of 4 × 5 × 3 rooms
+/// (metres) with floors of 2 × 2 quads, walls of a lower and an upper face,
+/// and one ceiling quad per room.
+///
+/// The clean building has no defect. Dirt is added at random places drawn
+/// from the seed (the same arguments always give the same model): flipped
+/// faces, non-planar floor quads, nearly coincident vertices, T-vertices;
+/// and ceiling lights (emitters) and furniture boxes standing on the floors.
+/// Fractions are exact: round(fraction × n) items are chosen.
+#[derive(Parser, Debug)]
+#[command(version, after_help = EXAMPLES)]
+struct Args {
+    #[command(flatten)]
+    common: cli::Common,
+    /// Rooms along x and y (N × N).
+    #[arg(long, value_name = "N", conflicts_with_all = ["faces", "rooms_x"], value_parser = clap::value_parser!(u32).range(1..=2000))]
+    rooms: Option<u32>,
+    /// Rooms along x (with --rooms-y).
+    #[arg(long, value_name = "X", requires = "rooms_y", conflicts_with = "faces", value_parser = clap::value_parser!(u32).range(1..=2000))]
+    rooms_x: Option<u32>,
+    /// Rooms along y (with --rooms-x).
+    #[arg(long, value_name = "Y", requires = "rooms_x", value_parser = clap::value_parser!(u32).range(1..=2000))]
+    rooms_y: Option<u32>,
+    /// About this many faces: the nearly square grid of rooms that comes nearest.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=50_000_000))]
+    faces: Option<u64>,
+    /// Seed of the random choices.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Start from every kind of dirt: 30% flipped, 10% non-planar, half the
+    /// walls with T-vertices and nearly coincident vertices, a light and two
+    /// boxes a room (the flags below override).
+    #[arg(long)]
+    messy: bool,
+    /// The grouper's dirt (every wall with a T-vertex and nearly coincident vertices).
+    #[arg(long, conflicts_with = "messy")]
+    grouper: bool,
+    /// Fraction of all faces written reversed.
+    #[arg(long, value_name = "F", value_parser = fraction)]
+    flipped: Option<f64>,
+    /// Fraction of all faces made non-planar (floor quads, at most 4 a room).
+    #[arg(long, value_name = "F", value_parser = fraction)]
+    nonplanar: Option<f64>,
+    /// How far a non-planar quad's corner moves (model units).
+    #[arg(long, value_name = "LEN", value_parser = cli::parse_epsilon)]
+    lift: Option<f64>,
+    /// Fraction of walls and of ceilings with nearly coincident vertex copies.
+    #[arg(long, value_name = "F", value_parser = fraction)]
+    coincident: Option<f64>,
+    /// Distance of the nearly coincident copies.
+    #[arg(long, value_name = "LEN", value_parser = cli::parse_epsilon)]
+    offset: Option<f64>,
+    /// Fraction of walls with a T-vertex at their foot.
+    #[arg(long, value_name = "F", value_parser = fraction)]
+    tvertices: Option<f64>,
+    /// A 1 × 1 ceiling light (emitter) in every room, 1 cm below the ceiling.
+    #[arg(long)]
+    lights: bool,
+    /// No lights (with --messy).
+    #[arg(long, conflicts_with = "lights")]
+    no_lights: bool,
+    /// Furniture boxes per room, 0 to 4.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(0..=4))]
+    furniture: Option<u8>,
+}
+
+fn fraction(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
+        _ => Err(format!("'{s}' is not a number between 0 and 1")),
+    }
+}
+
+fn main() -> std::process::ExitCode {
+    // The input file and --strict of the common flags mean nothing here.
+    let cmd = Args::command()
+        .mut_arg("input", |a| a.hide(true))
+        .mut_arg("strict", |a| a.hide(true));
+    let args = match Args::from_arg_matches(&cmd.get_matches()) {
+        Ok(a) => a,
+        Err(e) => e.exit(),
+    };
+    cli::run(|| {
+        let c = &args.common;
+        if c.input.is_some() {
+            return Err(cli::Failure::input(
+                "error: ugbuilding reads no input (did you mean -o FILE?)",
+            ));
+        }
+        let mut dirt = if args.messy {
+            building::Dirt::messy()
+        } else if args.grouper {
+            building::Dirt::grouper()
+        } else {
+            building::Dirt::default()
+        };
+        if let Some(v) = args.flipped {
+            dirt.flipped = v;
+        }
+        if let Some(v) = args.nonplanar {
+            dirt.nonplanar = v;
+        }
+        if let Some(v) = args.lift {
+            dirt.lift = v;
+        }
+        if let Some(v) = args.coincident {
+            dirt.coincident = v;
+        }
+        if let Some(v) = args.offset {
+            dirt.offset = v;
+        }
+        if let Some(v) = args.tvertices {
+            dirt.tvertices = v;
+        }
+        if args.lights {
+            dirt.lights = true;
+        }
+        if args.no_lights {
+            dirt.lights = false;
+        }
+        if let Some(v) = args.furniture {
+            dirt.furniture = v as usize;
+        }
+        let (x, y) = match (args.rooms, args.rooms_x.zip(args.rooms_y), args.faces) {
+            (Some(n), _, _) => (n as usize, n as usize),
+            (_, Some((x, y)), _) => (x as usize, y as usize),
+            (_, _, Some(f)) => building::rooms_for_faces(f as usize, &dirt),
+            _ => {
+                return Err(cli::Failure::input(
+                    "error: say how big: --rooms N, --rooms-x X --rooms-y Y or --faces N",
+                ));
+            }
+        };
+        let model = building::generate(x, y, &dirt, args.seed);
+        c.verbose(format!(
+            "{x} × {y} rooms, {} faces, {} vertices; seed {}; {dirt:?}",
+            model.faces.len(),
+            model.vertices.len(),
+            args.seed
+        ));
+        c.write_model(&model)
+    })
+}
