@@ -170,15 +170,21 @@ fn cornell_box_converges_with_shadows_and_refined_shadow_edges() {
             continue;
         }
         let b: Vec<f64> = c.iter().map(|v| col[v.idx()].iter().sum::<f64>()).collect();
-        let spread = b.iter().copied().fold(f64::MIN, f64::max) - b.iter().copied().fold(f64::MAX, f64::min);
-        let area = (1..p.len() - 1).map(|k| (p[k] - p[0]).cross(p[k + 1] - p[0]).length() / 2.0).sum::<f64>();
+        let spread =
+            b.iter().copied().fold(f64::MIN, f64::max) - b.iter().copied().fold(f64::MAX, f64::min);
+        let area = (1..p.len() - 1)
+            .map(|k| (p[k] - p[0]).cross(p[k + 1] - p[0]).length() / 2.0)
+            .sum::<f64>();
         rows.push((spread, area));
     }
     rows.sort_by(|a, b| a.0.total_cmp(&b.0));
     let cut = rows.len() * 9 / 10;
     let mean = |r: &[(f64, f64)]| r.iter().map(|x| x.1).sum::<f64>() / r.len() as f64;
     let (steep, smooth) = (mean(&rows[cut..]), mean(&rows[..cut]));
-    eprintln!("floor elements: {}; mean area of the steepest 10%: {steep:.1}, of the rest: {smooth:.1}", rows.len());
+    eprintln!(
+        "floor elements: {}; mean area of the steepest 10%: {steep:.1}, of the rest: {smooth:.1}",
+        rows.len()
+    );
     assert!(steep < 0.8 * smooth, "steep {steep} vs smooth {smooth}");
     // Tolerance-aware golden: area-weighted mean colour per material within 1e-6 relative.
     let actual = means(&m);

@@ -80,5 +80,16 @@ pub(crate) fn quote(text: &[u8]) -> String {
     if s.chars().count() > MAX {
         out.push('…');
     }
-    format!("'{}'", out.escape_debug())
+    // Control characters and the like are escaped (`\u{feff}`); quotes are not.
+    let mut shown = String::with_capacity(out.len() + 2);
+    shown.push('\'');
+    for c in out.chars() {
+        if matches!(c, '"' | '\'') {
+            shown.push(c);
+        } else {
+            shown.extend(c.escape_debug());
+        }
+    }
+    shown.push('\'');
+    shown
 }

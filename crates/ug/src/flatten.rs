@@ -22,6 +22,9 @@ impl Default for FlattenLimits {
     }
 }
 
+/// How deep instances may nest (an instance of a def that holds an instance of …).
+pub const MAX_INSTANCE_DEPTH: usize = 100;
+
 /// The affine map of a transform list; flags apply left to right.
 pub fn transform_matrix(ts: &[Transform]) -> DAffine3 {
     ts.iter()
@@ -42,15 +45,15 @@ fn op_matrix(t: &Transform) -> DAffine3 {
         Ty => DAffine3::from_translation(DVec3::new(0.0, a[0], 0.0)),
         Tz => DAffine3::from_translation(DVec3::new(0.0, 0.0, a[0])),
         Ta => DAffine3::from_translation(v3(0)),
-        Rx => DAffine3::from_rotation_x(a[0].to_radians()),
-        Ry => DAffine3::from_rotation_y(a[0].to_radians()),
-        Rz => DAffine3::from_rotation_z(a[0].to_radians()),
+        Rx => rotation(DVec3::X, a[0]),
+        Ry => rotation(DVec3::Y, a[0]),
+        Rz => rotation(DVec3::Z, a[0]),
         Ra => {
             let axis = v3(0);
             if axis.length_squared() == 0.0 {
                 DAffine3::IDENTITY
             } else {
-                DAffine3::from_axis_angle(axis.normalize(), a[3].to_radians())
+                rotation(axis.normalize(), a[3])
             }
         }
         Rv => {
@@ -59,7 +62,7 @@ fn op_matrix(t: &Transform) -> DAffine3 {
             if deg == 0.0 {
                 DAffine3::IDENTITY
             } else {
-                DAffine3::from_axis_angle(v / deg, deg.to_radians())
+                rotation(v / deg, deg)
             }
         }
         Mx => DAffine3::from_scale(DVec3::new(-1.0, 1.0, 1.0)),
@@ -71,8 +74,9 @@ fn op_matrix(t: &Transform) -> DAffine3 {
             if n.length_squared() == 0.0 {
                 return DAffine3::IDENTITY;
             }
-            let n = n.normalize();
-            let m = DMat3::IDENTITY - 2.0 * DMat3::from_cols(n * n.x, n * n.y, n * n.z);
+            // I - 2 n nᵀ / (n·n): exact for axis-aligned and diagonal normals.
+            let k = 2.0 / n.length_squared();
+            let m = DMat3::IDENTITY - DMat3::from_cols(n * (k * n.x), n * (k * n.y), n * (k * n.z));
             DAffine3::from_mat3(m)
         }
         M3 => DAffine3::from_mat3(DMat3::from_cols_array(&[
@@ -88,6 +92,47 @@ fn op_matrix(t: &Transform) -> DAffine3 {
     }
 }
 
+/// Sine and cosine of an angle in degrees, exact at multiples of 90°
+/// (so that `-rz 90` maps grid points to grid points).
+fn sin_cos_deg(deg: f64) -> (f64, f64) {
+    let r = deg.rem_euclid(360.0);
+    if r == 0.0 {
+        (0.0, 1.0)
+    } else if r == 90.0 {
+        (1.0, 0.0)
+    } else if r == 180.0 {
+        (0.0, -1.0)
+    } else if r == 270.0 {
+        (-1.0, 0.0)
+    } else {
+        deg.to_radians().sin_cos()
+    }
+}
+
+/// Right-handed rotation by `deg` degrees about the unit vector `k` (Rodrigues).
+fn rotation(k: DVec3, deg: f64) -> DAffine3 {
+    let (s, c) = sin_cos_deg(deg);
+    let t = 1.0 - c;
+    let m = DMat3::from_cols(
+        DVec3::new(
+            c + t * k.x * k.x,
+            t * k.x * k.y + s * k.z,
+            t * k.x * k.z - s * k.y,
+        ),
+        DVec3::new(
+            t * k.x * k.y - s * k.z,
+            c + t * k.y * k.y,
+            t * k.y * k.z + s * k.x,
+        ),
+        DVec3::new(
+            t * k.x * k.z + s * k.y,
+            t * k.y * k.z - s * k.x,
+            c + t * k.z * k.z,
+        ),
+    );
+    DAffine3::from_mat3(m)
+}
+
 struct Flattener<'m> {
     src: &'m Model,
     out: Model,
@@ -95,6 +140,135 @@ struct Flattener<'m> {
     fnames: FxHashSet<String>,
     unnamed: Vec<u32>,
     limits: FlattenLimits,
+    /// What one plain instance of each def creates.
+    sizes: Vec<Size>,
+}
+
+/// How many vertices, faces and wires some statements create when flattened.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Size {
+    vertices: u64,
+    faces: u64,
+    wires: u64,
+}
+
+impl Size {
+    fn is_empty(self) -> bool {
+        self.vertices == 0 && self.faces == 0 && self.wires == 0
+    }
+    fn add(self, o: Size) -> Size {
+        Size {
+            vertices: self.vertices.saturating_add(o.vertices),
+            faces: self.faces.saturating_add(o.faces),
+            wires: self.wires.saturating_add(o.wires),
+        }
+    }
+    fn times(self, n: u64) -> Size {
+        Size {
+            vertices: self.vertices.saturating_mul(n),
+            faces: self.faces.saturating_mul(n),
+            wires: self.wires.saturating_mul(n),
+        }
+    }
+}
+
+fn too_large(limits: &FlattenLimits, s: Size) -> Diagnostic {
+    let count = |n: u64| {
+        if n == u64::MAX {
+            "too many".to_string()
+        } else {
+            n.to_string()
+        }
+    };
+    Diagnostic::plain(format!(
+        "flattening would create {} vertices and {} faces, more than the limit of {} vertices or {} faces; the instances or arrays are too large",
+        count(s.vertices),
+        count(s.faces),
+        limits.max_vertices,
+        limits.max_faces
+    ))
+}
+
+/// The size of `items` flattened, given the size of each def.
+fn items_size(m: &Model, items: &[Item], sizes: &[Size]) -> Size {
+    let mut s = Size::default();
+    for it in items {
+        match it {
+            Item::Vertex(_) => s.vertices = s.vertices.saturating_add(1),
+            Item::Face(_) => s.faces = s.faces.saturating_add(1),
+            Item::Wire(_) => s.wires = s.wires.saturating_add(1),
+            Item::Instance(i) => {
+                let inst = &m.instances[i.idx()];
+                let copies = inst.array.as_ref().map_or(1, |a| u64::from(a.count));
+                let one = sizes.get(inst.def.idx()).copied().unwrap_or_default();
+                s = s.add(one.times(copies));
+            }
+            _ => {}
+        }
+    }
+    s
+}
+
+/// The flattened size of every def. Defs may only instantiate defs that precede
+/// them in the parser's output, but a model built in code might not, so a def
+/// that (indirectly) instantiates itself is an error here rather than a hang.
+fn def_sizes(m: &Model) -> Result<Vec<Size>, Diagnostic> {
+    #[derive(Clone, Copy, PartialEq)]
+    enum State {
+        New,
+        Busy,
+        Done,
+    }
+    fn visit(
+        m: &Model,
+        d: usize,
+        state: &mut [State],
+        sizes: &mut [Size],
+    ) -> Result<(), Diagnostic> {
+        // An explicit stack instead of recursion: deep chains of defs cannot overflow it.
+        let mut stack: Vec<(usize, bool)> = vec![(d, false)];
+        while let Some((d, children_done)) = stack.pop() {
+            if children_done {
+                sizes[d] = items_size(m, &m.defs[d].items, sizes);
+                state[d] = State::Done;
+                continue;
+            }
+            match state[d] {
+                State::Done => continue,
+                State::Busy => {
+                    return Err(Diagnostic::plain(format!(
+                        "def '{}' instantiates itself",
+                        m.defs[d].name
+                    )));
+                }
+                State::New => {}
+            }
+            state[d] = State::Busy;
+            stack.push((d, true));
+            for it in &m.defs[d].items {
+                if let Item::Instance(i) = it {
+                    let c = m.instances[i.idx()].def.idx();
+                    match state.get(c) {
+                        Some(State::New) => stack.push((c, false)),
+                        Some(State::Busy) => {
+                            return Err(Diagnostic::plain(format!(
+                                "def '{}' instantiates itself",
+                                m.defs[c].name
+                            )));
+                        }
+                        _ => {}
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+    let mut state = vec![State::New; m.defs.len()];
+    let mut sizes = vec![Size::default(); m.defs.len()];
+    for d in 0..m.defs.len() {
+        visit(m, d, &mut state, &mut sizes)?;
+    }
+    Ok(sizes)
 }
 
 impl Model {
@@ -109,6 +283,13 @@ impl Model {
         if self.is_flat() {
             return Ok(self.clone());
         }
+        // Count what flattening would create before creating any of it, so that
+        // an instance bomb (arrays of arrays of …) is refused without allocating it.
+        let sizes = def_sizes(self)?;
+        let total = items_size(self, &self.items, &sizes);
+        if total.vertices > limits.max_vertices as u64 || total.faces > limits.max_faces as u64 {
+            return Err(too_large(&limits, total));
+        }
         let mut f = Flattener {
             src: self,
             out: Model {
@@ -119,6 +300,7 @@ impl Model {
             fnames: FxHashSet::default(),
             unnamed: vec![0; self.defs.len()],
             limits,
+            sizes,
         };
         for it in &self.items {
             match it {
@@ -138,7 +320,7 @@ impl Model {
                 _ => {}
             }
         }
-        f.expand(&self.items, DAffine3::IDENTITY, None, None, true)?;
+        f.expand(&self.items, DAffine3::IDENTITY, None, None, 0)?;
         Ok(f.out)
     }
 }
@@ -164,12 +346,29 @@ impl Flattener<'_> {
         if self.out.vertices.len() > self.limits.max_vertices
             || self.out.faces.len() > self.limits.max_faces
         {
-            return Err(Diagnostic::plain(format!(
-                "flattening would create more than {} vertices or {} faces; the instances or arrays are too large",
-                self.limits.max_vertices, self.limits.max_faces
-            )));
+            let s = Size {
+                vertices: self.out.vertices.len() as u64,
+                faces: self.out.faces.len() as u64,
+                wires: self.out.wires.len() as u64,
+            };
+            return Err(too_large(&self.limits, s));
         }
         Ok(())
+    }
+
+    /// Emits the materials defined inside a def (materials are global), and
+    /// those of the defs nested in it.
+    fn hoist_materials(&mut self, items: &[Item]) {
+        for it in items {
+            match it {
+                Item::Material(id) => self.out.items.push(Item::Material(*id)),
+                Item::Def(d) => {
+                    let src = self.src;
+                    self.hoist_materials(&src.defs[d.idx()].items);
+                }
+                _ => {}
+            }
+        }
     }
 
     /// Emits the statements `items` (top level when `top`), transformed by `m`.
@@ -179,9 +378,16 @@ impl Flattener<'_> {
         m: DAffine3,
         prefix: Option<&str>,
         color: Option<MaterialId>,
-        top: bool,
+        depth: usize,
     ) -> Result<(), Diagnostic> {
         let src = self.src;
+        let top = depth == 0;
+        if depth > MAX_INSTANCE_DEPTH {
+            return Err(Diagnostic::plain(format!(
+                "instances nested more than {MAX_INSTANCE_DEPTH} deep (at '{}')",
+                prefix.unwrap_or("")
+            )));
+        }
         let flip = m.matrix3.determinant() < 0.0;
         let mut map: rustc_hash::FxHashMap<u32, VertexId> = Default::default();
         let mut faces_to_fix: Vec<FaceId> = Vec::new();
@@ -199,10 +405,16 @@ impl Flattener<'_> {
                     } else {
                         Self::unique(&mut self.vnames, name_of(prefix, &sv.name))
                     };
+                    let pos = m.transform_point3(sv.pos);
+                    if !pos.is_finite() {
+                        return Err(Diagnostic::plain(format!(
+                            "flattening moves vertex '{name}' to a non-finite position (the instance transforms overflow)"
+                        )));
+                    }
                     let id = VertexId(self.out.vertices.len() as u32);
                     self.out.vertices.push(Vertex {
                         name,
-                        pos: m.transform_point3(sv.pos),
+                        pos,
                         color: sv.color,
                     });
                     self.out.items.push(Item::Vertex(id));
@@ -260,17 +472,21 @@ impl Flattener<'_> {
                             format!("{}{}", def.name, self.unnamed[inst.def.idx()])
                         }
                     };
+                    if self.sizes[inst.def.idx()].is_empty() {
+                        // Nothing to create (only comments, lights, … or nothing at all).
+                        continue;
+                    }
                     let base = name_of(prefix, &base);
-                    let own = crate::flatten::transform_matrix(&inst.transforms);
+                    let own = transform_matrix(&inst.transforms);
                     let col = inst.color.or(color);
                     match &inst.array {
-                        None => self.expand(&def.items, m * own, Some(&base), col, false)?,
+                        None => self.expand(&def.items, m * own, Some(&base), col, depth + 1)?,
                         Some(a) => {
                             let step = transform_matrix(&a.step);
                             let mut acc = own;
                             for k in 0..a.count {
                                 let p = format!("{base}.{k}");
-                                self.expand(&def.items, m * acc, Some(&p), col, false)?;
+                                self.expand(&def.items, m * acc, Some(&p), col, depth + 1)?;
                                 acc = step * acc;
                             }
                         }
@@ -281,7 +497,11 @@ impl Flattener<'_> {
                         self.out.items.push(Item::Material(*id));
                     }
                 }
-                Item::Def(_) => {}
+                Item::Def(d) => {
+                    if top {
+                        self.hoist_materials(&src.defs[d.idx()].items);
+                    }
+                }
                 other => {
                     // Comments, lights, cameras, escapes and unknown statements
                     // stay at the top level; inside defs they are dropped.

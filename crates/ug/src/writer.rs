@@ -13,15 +13,81 @@ pub fn fmt_f64(v: f64, buf: &mut ryu::Buffer) -> &str {
     s.strip_suffix(".0").unwrap_or(s)
 }
 
+/// Appends `v` to `out` exactly as [`fmt_f64`] formats it, faster for the
+/// common short decimals: when `v` is a whole number of millionths `n` (that is,
+/// `n / 10⁶` reads back as `v`; `n` is then unique, and the fewest decimals
+/// are those of `n` less its trailing zeros), the digits are those of `n`.
+/// Everything else goes through ryu.
+pub fn push_f64(out: &mut Vec<u8>, v: f64, buf: &mut ryu::Buffer) {
+    const SCALE: f64 = 1e6;
+    let a = v.abs();
+    if v == 0.0 {
+        out.push(b'0');
+        return;
+    }
+    // Within these bounds ryu writes plain decimals (no exponent), and
+    // a·10⁶ < 2⁵⁰, so rounding the product finds the one candidate.
+    if (1e-4..1e9).contains(&a) {
+        let n = (a * SCALE).round();
+        if n / SCALE == a {
+            let n = n as u64;
+            if v < 0.0 {
+                out.push(b'-');
+            }
+            push_u64(out, n / 1_000_000);
+            let mut frac = n % 1_000_000;
+            if frac != 0 {
+                let mut width = 6;
+                while frac.is_multiple_of(10) {
+                    frac /= 10;
+                    width -= 1;
+                }
+                out.push(b'.');
+                let mut digits = [b'0'; 6];
+                for d in digits[..width].iter_mut().rev() {
+                    *d = b'0' + (frac % 10) as u8;
+                    frac /= 10;
+                }
+                out.extend_from_slice(&digits[..width]);
+            }
+            return;
+        }
+    }
+    out.extend_from_slice(fmt_f64(v, buf).as_bytes());
+}
+
+fn push_u64(out: &mut Vec<u8>, mut n: u64) {
+    let mut digits = [0u8; 20];
+    let mut k = digits.len();
+    loop {
+        k -= 1;
+        digits[k] = b'0' + (n % 10) as u8;
+        n /= 10;
+        if n == 0 {
+            break;
+        }
+    }
+    out.extend_from_slice(&digits[k..]);
+}
+
+/// Output is handed to the writer in pieces of about this size.
+const CHUNK: usize = 1 << 16;
+
 /// Writes a model as UG text.
 pub fn write<W: Write>(m: &Model, out: &mut W) -> io::Result<()> {
     let mut w = Writer {
         m,
         buf: ryu::Buffer::new(),
-        out: Vec::with_capacity(1 << 16),
+        out: Vec::with_capacity(CHUNK + 4096),
+        sink: out,
+        error: None,
     };
     w.items(&m.items, 0);
-    out.write_all(&w.out)
+    w.flush();
+    match w.error {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
 }
 
 /// The model as a UG string.
@@ -31,19 +97,31 @@ pub fn write_string(m: &Model) -> String {
     String::from_utf8(v).expect("the writer emits UTF-8")
 }
 
-struct Writer<'m> {
+struct Writer<'m, 'w> {
     m: &'m Model,
     buf: ryu::Buffer,
+    /// Pending output, handed to `sink` every [`CHUNK`] bytes.
     out: Vec<u8>,
+    sink: &'w mut dyn Write,
+    /// The first write error; nothing more is written after it.
+    error: Option<io::Error>,
 }
 
-impl Writer<'_> {
+impl Writer<'_, '_> {
+    fn flush(&mut self) {
+        if self.error.is_none()
+            && let Err(e) = self.sink.write_all(&self.out)
+        {
+            self.error = Some(e);
+        }
+        self.out.clear();
+    }
     fn s(&mut self, s: &str) {
         self.out.extend_from_slice(s.as_bytes());
     }
+    #[inline]
     fn num(&mut self, v: f64) {
-        let s = fmt_f64(v, &mut self.buf);
-        self.out.extend_from_slice(s.as_bytes());
+        push_f64(&mut self.out, v, &mut self.buf);
     }
     fn nums(&mut self, vs: &[f64]) {
         for &v in vs {
@@ -89,6 +167,9 @@ impl Writer<'_> {
             self.indent(depth);
             self.item(it, depth);
             self.out.push(b'\n');
+            if self.out.len() >= CHUNK {
+                self.flush();
+            }
         }
     }
 
@@ -213,7 +294,20 @@ impl Writer<'_> {
             }
             Item::Include(p) => {
                 self.s("include ");
-                self.s(p);
+                // The reader removes one pair of quotes around the name: a name
+                // that is itself quoted is written inside the other kind.
+                let quoted = |q: char| p.len() >= 2 && p.starts_with(q) && p.ends_with(q);
+                if quoted('"') {
+                    self.out.push(b'\'');
+                    self.s(p);
+                    self.out.push(b'\'');
+                } else if quoted('\'') {
+                    self.out.push(b'"');
+                    self.s(p);
+                    self.out.push(b'"');
+                } else {
+                    self.s(p);
+                }
                 self.out.push(b';');
             }
             Item::Escape(e) => {
