@@ -27,7 +27,7 @@ fn cut(input: &[u8], len: &str) -> (String, [f64; 4]) {
     let num_after = |key: &str| -> f64 {
         let rest = &line[line.find(key).unwrap() + key.len()..];
         rest.trim_start()
-            .split(|c: char| c == ' ' || c == ';' || c == '°')
+            .split([' ', ';', '°'])
             .next()
             .unwrap()
             .parse()

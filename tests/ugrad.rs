@@ -48,8 +48,8 @@ fn means(m: &ug::Model) -> String {
             }
         };
         acc[slot].1 += area;
-        for k in 0..3 {
-            acc[slot].2[k] += mean[k] * area;
+        for (sum, m) in acc[slot].2.iter_mut().zip(mean) {
+            *sum += m * area;
         }
     }
     acc.iter()

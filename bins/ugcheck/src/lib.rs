@@ -393,12 +393,7 @@ pub fn check(m: &Model, eps: f64) -> Report {
     };
 
     // Per-face checks.
-    let per_face: Vec<(
-        Option<Degenerate>,
-        Option<NonPlanar>,
-        Option<NonPatch>,
-        Option<FaceGeom>,
-    )> = cx.faces.par_iter().map(|&f| face_checks(&cx, f)).collect();
+    let per_face: Vec<FaceFindings> = cx.faces.par_iter().map(|&f| face_checks(&cx, f)).collect();
     let mut degenerate = Vec::new();
     let mut nonplanar = Vec::new();
     let mut nonpatch = Vec::new();
@@ -471,15 +466,16 @@ pub fn check(m: &Model, eps: f64) -> Report {
     }
 }
 
-fn face_checks(
-    cx: &Ctx<'_>,
-    f: FaceId,
-) -> (
+/// What the per-face checks find: degeneracy, non-planarity, patch shape,
+/// and the geometry for the pair tests (`None` for a degenerate face).
+type FaceFindings = (
     Option<Degenerate>,
     Option<NonPlanar>,
     Option<NonPatch>,
     Option<FaceGeom>,
-) {
+);
+
+fn face_checks(cx: &Ctx<'_>, f: FaceId) -> FaceFindings {
     let face = &cx.m.faces[f.idx()];
     let label = cx.label(f).to_string();
     let pts = cx.points(f);

@@ -178,15 +178,17 @@ pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
         _ => true,
     });
     // Origin annotations of removed faces go too.
-    let mut keep = vec![true; out.items.len()];
-    for k in 0..out.items.len() {
-        if let Item::Comment(c) = &out.items[k]
-            && c.trim_start().starts_with("ugcopl origin")
-            && !matches!(out.items.get(k + 1), Some(Item::Face(_)))
-        {
-            keep[k] = false;
-        }
-    }
+    let keep: Vec<bool> = out
+        .items
+        .iter()
+        .enumerate()
+        .map(|(k, it)| match it {
+            Item::Comment(c) if c.trim_start().starts_with("ugcopl origin") => {
+                matches!(out.items.get(k + 1), Some(Item::Face(_)))
+            }
+            _ => true,
+        })
+        .collect();
     let mut k = 0;
     out.items.retain(|_| {
         k += 1;

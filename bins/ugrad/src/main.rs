@@ -85,7 +85,7 @@ struct Args {
 
 fn fraction(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
-        Ok(v) if v.is_finite() && v >= 0.0 && v <= 1.0 => Ok(v),
+        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
         _ => Err(format!("'{s}' is not a number between 0 and 1")),
     }
 }

@@ -36,58 +36,6 @@ pub fn region_area(a: &[Vec<DVec2>]) -> f64 {
     region(a).unsigned_area()
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn sq(x0: f64, y0: f64, s: f64) -> Vec<DVec2> {
-        vec![
-            DVec2::new(x0, y0),
-            DVec2::new(x0 + s, y0),
-            DVec2::new(x0 + s, y0 + s),
-            DVec2::new(x0, y0 + s),
-        ]
-    }
-
-    #[test]
-    fn overlap_of_squares() {
-        assert!((overlap_area(&[sq(0., 0., 2.)], &[sq(1., 1., 2.)]) - 1.0).abs() < 1e-12);
-        assert_eq!(overlap_area(&[sq(0., 0., 1.)], &[sq(1., 0., 1.)]), 0.0);
-        // Clockwise input is the same region.
-        let mut cw = sq(1., 1., 2.);
-        cw.reverse();
-        assert!((overlap_area(&[sq(0., 0., 2.)], &[cw]) - 1.0).abs() < 1e-12);
-    }
-
-    #[test]
-    fn split_by_makes_the_overlap_a_piece() {
-        let pieces = split_by(&[sq(0., 0., 2.)], &[vec![sq(1., 1., 2.)]], 1e-12);
-        assert_eq!(pieces.len(), 2);
-        let areas: Vec<f64> = pieces.iter().map(|p| region_area(p)).collect();
-        assert!(
-            (areas[0] - 1.0).abs() < 1e-12 && (areas[1] - 3.0).abs() < 1e-12,
-            "{areas:?}"
-        );
-        // A square cut by a smaller one inside it: a piece with a hole and the inner piece.
-        let pieces = split_by(&[sq(0., 0., 4.)], &[vec![sq(1., 1., 1.)]], 1e-12);
-        assert_eq!(pieces.len(), 2);
-        assert_eq!(pieces.iter().map(|p| p.len()).collect::<Vec<_>>(), [1, 2]);
-        assert!(crate::polygon::signed_area_2d(&pieces[1][0]) > 0.0);
-        assert!(crate::polygon::signed_area_2d(&pieces[1][1]) < 0.0);
-    }
-
-    #[test]
-    fn holes_and_islands() {
-        let mut hole = sq(2., 2., 6.);
-        hole.reverse();
-        let face = vec![sq(0., 0., 10.), hole, sq(4., 4., 2.)];
-        assert!((region_area(&face) - 68.0).abs() < 1e-9);
-        // A square inside the hole but outside the island overlaps nothing.
-        assert!(overlap_area(&face, &[sq(2.5, 2.5, 1.0)]) < 1e-12);
-        assert!((overlap_area(&face, &[sq(4.5, 4.5, 1.0)]) - 1.0).abs() < 1e-12);
-    }
-}
-
 /// Cuts the region of `a` by each of `others` in turn: every piece is split
 /// into its part inside and its part outside the next region. Returns the
 /// pieces as polygons with holes (outer contour counter-clockwise, holes
@@ -188,4 +136,56 @@ pub fn refine_point(p: DVec2, segments: &[(DVec2, DVec2)], tol: f64) -> DVec2 {
         return a + u * (p - a).dot(u);
     }
     p
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sq(x0: f64, y0: f64, s: f64) -> Vec<DVec2> {
+        vec![
+            DVec2::new(x0, y0),
+            DVec2::new(x0 + s, y0),
+            DVec2::new(x0 + s, y0 + s),
+            DVec2::new(x0, y0 + s),
+        ]
+    }
+
+    #[test]
+    fn overlap_of_squares() {
+        assert!((overlap_area(&[sq(0., 0., 2.)], &[sq(1., 1., 2.)]) - 1.0).abs() < 1e-12);
+        assert_eq!(overlap_area(&[sq(0., 0., 1.)], &[sq(1., 0., 1.)]), 0.0);
+        // Clockwise input is the same region.
+        let mut cw = sq(1., 1., 2.);
+        cw.reverse();
+        assert!((overlap_area(&[sq(0., 0., 2.)], &[cw]) - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn split_by_makes_the_overlap_a_piece() {
+        let pieces = split_by(&[sq(0., 0., 2.)], &[vec![sq(1., 1., 2.)]], 1e-12);
+        assert_eq!(pieces.len(), 2);
+        let areas: Vec<f64> = pieces.iter().map(|p| region_area(p)).collect();
+        assert!(
+            (areas[0] - 1.0).abs() < 1e-12 && (areas[1] - 3.0).abs() < 1e-12,
+            "{areas:?}"
+        );
+        // A square cut by a smaller one inside it: a piece with a hole and the inner piece.
+        let pieces = split_by(&[sq(0., 0., 4.)], &[vec![sq(1., 1., 1.)]], 1e-12);
+        assert_eq!(pieces.len(), 2);
+        assert_eq!(pieces.iter().map(|p| p.len()).collect::<Vec<_>>(), [1, 2]);
+        assert!(crate::polygon::signed_area_2d(&pieces[1][0]) > 0.0);
+        assert!(crate::polygon::signed_area_2d(&pieces[1][1]) < 0.0);
+    }
+
+    #[test]
+    fn holes_and_islands() {
+        let mut hole = sq(2., 2., 6.);
+        hole.reverse();
+        let face = vec![sq(0., 0., 10.), hole, sq(4., 4., 2.)];
+        assert!((region_area(&face) - 68.0).abs() < 1e-9);
+        // A square inside the hole but outside the island overlaps nothing.
+        assert!(overlap_area(&face, &[sq(2.5, 2.5, 1.0)]) < 1e-12);
+        assert!((overlap_area(&face, &[sq(4.5, 4.5, 1.0)]) - 1.0).abs() < 1e-12);
+    }
 }

@@ -137,7 +137,7 @@ mod tests {
         let mut hole: Vec<DVec3> = sq(2.0, 2.0, 6.0).iter().map(|p| p.extend(0.0)).collect();
         hole.reverse();
         let island: Vec<DVec3> = sq(4.0, 4.0, 2.0).iter().map(|p| p.extend(0.0)).collect();
-        assert_eq!(face_area(&[outer.clone()]), 100.0);
+        assert_eq!(face_area(std::slice::from_ref(&outer)), 100.0);
         assert_eq!(face_area(&[outer.clone(), hole.clone()]), 64.0);
         assert_eq!(face_area(&[outer, hole, island]), 68.0);
     }

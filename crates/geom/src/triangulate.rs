@@ -60,6 +60,59 @@ pub fn triangulate_polygon(contours: &[Vec<DVec2>]) -> Option<Vec<[usize; 3]>> {
     Some(tris)
 }
 
+/// Triangles for a (possibly non-planar) face, as indices into its points
+/// numbered contour after contour, wound like the face:
+///
+/// * a lone quadrilateral is split along the diagonal that folds it least
+///   (the smaller angle between the two triangles' normals), never along a
+///   diagonal that lies outside it;
+/// * anything else gets the constrained Delaunay triangulation of its
+///   contours projected on the plane of its outer contour's Newell normal.
+///
+/// `None` for a degenerate face or one whose projection crosses itself.
+/// `ugplanar` tessellates with this, and `ugcheck` measures the area of
+/// non-planar faces as the area of these triangles, so the two agree.
+pub fn fold_triangles(contours: &[Vec<DVec3>]) -> Option<Vec<[usize; 3]>> {
+    let n = crate::polygon::face_normal(contours)?;
+    if contours.len() == 1 && contours[0].len() == 4 {
+        let q = &contours[0];
+        let options = [[[0, 1, 2], [0, 2, 3]], [[0, 1, 3], [1, 2, 3]]];
+        let normal = |t: &[usize; 3]| (q[t[1]] - q[t[0]]).cross(q[t[2]] - q[t[0]]);
+        let mut best: Option<(f64, usize)> = None;
+        for (k, tris) in options.iter().enumerate() {
+            let (n0, n1) = (normal(&tris[0]), normal(&tris[1]));
+            if n0.dot(n) <= 0.0 || n1.dot(n) <= 0.0 {
+                continue;
+            }
+            let fold = n0.normalize().dot(n1.normalize()).clamp(-1.0, 1.0).acos();
+            if best.is_none_or(|(b, _)| fold < b) {
+                best = Some((fold, k));
+            }
+        }
+        if let Some((_, k)) = best {
+            return Some(options[k].to_vec());
+        }
+    }
+    let frame = crate::plane::Frame::new(contours[0][0], n);
+    let c2: Vec<Vec<DVec2>> = contours
+        .iter()
+        .map(|c| c.iter().map(|&p| frame.to_2d(p)).collect())
+        .collect();
+    triangulate_polygon(&c2)
+}
+
+/// Sum of the 3-D areas of triangles given as indices into `pts`.
+pub fn triangles_area(pts: &[DVec3], tris: &[[usize; 3]]) -> f64 {
+    tris.iter()
+        .map(|t| {
+            (pts[t[1]] - pts[t[0]])
+                .cross(pts[t[2]] - pts[t[0]])
+                .length()
+                / 2.0
+        })
+        .sum()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -129,57 +182,4 @@ mod tests {
         ]];
         assert!(triangulate_polygon(&dup).is_none());
     }
-}
-
-/// Triangles for a (possibly non-planar) face, as indices into its points
-/// numbered contour after contour, wound like the face:
-///
-/// * a lone quadrilateral is split along the diagonal that folds it least
-///   (the smaller angle between the two triangles' normals), never along a
-///   diagonal that lies outside it;
-/// * anything else gets the constrained Delaunay triangulation of its
-///   contours projected on the plane of its outer contour's Newell normal.
-///
-/// `None` for a degenerate face or one whose projection crosses itself.
-/// `ugplanar` tessellates with this, and `ugcheck` measures the area of
-/// non-planar faces as the area of these triangles, so the two agree.
-pub fn fold_triangles(contours: &[Vec<DVec3>]) -> Option<Vec<[usize; 3]>> {
-    let n = crate::polygon::face_normal(contours)?;
-    if contours.len() == 1 && contours[0].len() == 4 {
-        let q = &contours[0];
-        let options = [[[0, 1, 2], [0, 2, 3]], [[0, 1, 3], [1, 2, 3]]];
-        let normal = |t: &[usize; 3]| (q[t[1]] - q[t[0]]).cross(q[t[2]] - q[t[0]]);
-        let mut best: Option<(f64, usize)> = None;
-        for (k, tris) in options.iter().enumerate() {
-            let (n0, n1) = (normal(&tris[0]), normal(&tris[1]));
-            if n0.dot(n) <= 0.0 || n1.dot(n) <= 0.0 {
-                continue;
-            }
-            let fold = n0.normalize().dot(n1.normalize()).clamp(-1.0, 1.0).acos();
-            if best.is_none_or(|(b, _)| fold < b) {
-                best = Some((fold, k));
-            }
-        }
-        if let Some((_, k)) = best {
-            return Some(options[k].to_vec());
-        }
-    }
-    let frame = crate::plane::Frame::new(contours[0][0], n);
-    let c2: Vec<Vec<DVec2>> = contours
-        .iter()
-        .map(|c| c.iter().map(|&p| frame.to_2d(p)).collect())
-        .collect();
-    triangulate_polygon(&c2)
-}
-
-/// Sum of the 3-D areas of triangles given as indices into `pts`.
-pub fn triangles_area(pts: &[DVec3], tris: &[[usize; 3]]) -> f64 {
-    tris.iter()
-        .map(|t| {
-            (pts[t[1]] - pts[t[0]])
-                .cross(pts[t[2]] - pts[t[0]])
-                .length()
-                / 2.0
-        })
-        .sum()
 }
