@@ -84,7 +84,11 @@ fn the_floor_is_cut_along_the_walls_foot() {
 
 #[test]
 fn the_whole_cleaning_chain_on_the_cornell_box_and_the_slabs() {
-    for name in ["cornell-box.ug", "isect/wall-slabs.ug"] {
+    for name in [
+        "cornell-box.ug",
+        "isect/cornell-bottoms.ug",
+        "isect/wall-slabs.ug",
+    ] {
         let p = fixture(name);
         let planar = run_ok("ugplanar", &[p.to_str().unwrap()], None);
         let merged = run_ok("ugvlmerge", &[], Some(planar.as_bytes()));

@@ -166,7 +166,7 @@ pub fn copl(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
             .collect();
         let (blo, bhi) =
             geom::index::bbox(g.contours_2d.iter().flatten().map(|p| p.extend(0.0)), 0.0);
-        let tol = 1e-6 * (bhi - blo).length().max(eps);
+        let tol = 1e-7 * (bhi - blo).length().max(eps);
         if pieces.len() <= 1 {
             push(&mut out, face.clone());
             continue;

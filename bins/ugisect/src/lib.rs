@@ -168,7 +168,7 @@ pub fn isect(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
             seen.iter()
                 .map(|&(q, d)| (q - d * 2.0 * r, q + d * 2.0 * r)),
         );
-        let tol = 1e-6 * (hi - lo).length().max(eps);
+        let tol = 1e-7 * (hi - lo).length().max(eps);
         if pieces.len() <= 1 {
             push(&mut out, face.clone());
             continue;
