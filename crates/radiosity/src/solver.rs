@@ -331,31 +331,33 @@ impl<'v> Solver<'v> {
         }
         let area = self.mesh.patch_area(p);
         let d_b = scale(d_phi, 1.0 / area);
-        // §5.3: subdivide the shooter until its pieces are dim or small enough.
+        // §5.3: the shooter is divided until its pieces carry little energy or
+        // are small: walk its element tree from the root, shooting the
+        // coarsest elements that satisfy either rule (splitting leaves that
+        // do not). A dim patch shoots as one polygon however finely it has
+        // been refined as a receiver.
         let limit = self.opts.penumbra_energy * self.emitted;
-        loop {
-            let mut split_any = false;
-            for e in self.mesh.patch_leaves(p) {
-                let share = energy * self.mesh.elem_area(e) / area;
-                if share > limit && self.mesh.elem_longest_edge(e) > self.penumbra_size {
+        let mut elems: Vec<ElemId> = Vec::new();
+        let mut stack = vec![self.mesh.patch_root(p)];
+        while let Some(e) = stack.pop() {
+            let share = energy * self.mesh.elem_area(e) / area;
+            if share > limit && self.mesh.elem_longest_edge(e) > self.penumbra_size {
+                if self.mesh.elem_is_leaf(e) {
                     let split = self.mesh.split(e);
-                    if !split.refined.is_empty() {
-                        split_any = true;
-                        self.grow();
-                        for nv in &split.new_vertices {
-                            let (a, b) = (self.h[nv.parents[0].idx()], self.h[nv.parents[1].idx()]);
-                            self.h[nv.v.idx()] = scale(add(a, b), 0.5);
-                        }
+                    self.grow();
+                    for nv in &split.new_vertices {
+                        let (a, b) = (self.h[nv.parents[0].idx()], self.h[nv.parents[1].idx()]);
+                        self.h[nv.v.idx()] = scale(add(a, b), 0.5);
                     }
                 }
+                if let Some(children) = self.mesh.elem_children(e) {
+                    stack.extend(children.iter().rev());
+                    continue;
+                }
             }
-            if !split_any {
-                break;
-            }
+            elems.push(e);
         }
-        let shooters: Vec<(Vec<DVec3>, DVec3)> = self
-            .mesh
-            .patch_leaves(p)
+        let shooters: Vec<(Vec<DVec3>, DVec3)> = elems
             .into_iter()
             .map(|e| {
                 let poly: Vec<DVec3> = self
