@@ -633,6 +633,25 @@ fn t_vertices(cx: &Ctx<'_>, mesh: &winged::Mesh, geoms: &[Option<FaceGeom>]) -> 
 
 type PairLists = (Vec<Pair>, Vec<Overlap>, Vec<Pair>);
 
+/// The top-level faces of a model and their geometry for the pair tests
+/// (`None` for a face without area).
+pub fn face_geoms(m: &Model) -> (Vec<FaceId>, Vec<Option<FaceGeom>>) {
+    let faces: Vec<FaceId> = m.top_faces().collect();
+    let geoms = faces
+        .iter()
+        .map(|&f| {
+            FaceGeom::new(
+                m.faces[f.idx()]
+                    .contours
+                    .iter()
+                    .map(|c| c.iter().map(|&v| m.pos(v)).collect())
+                    .collect(),
+            )
+        })
+        .collect();
+    (faces, geoms)
+}
+
 /// How two faces of a pair meet (see [`classify_pairs`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PairKind {

@@ -18,7 +18,6 @@
 //! Vertices that only removed faces used are removed too.
 
 use geom::DVec3;
-use geom::intersect::FaceGeom;
 use ug::{FaceId, Item, Model};
 use ugcheck::PairKind;
 use winged::Mesh;
@@ -101,7 +100,7 @@ pub fn surface_area(mesh: &Mesh, f: FaceId, eps: f64) -> f64 {
 
 /// Removes one face of every coincident pair of a flat model.
 pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
-    let faces: Vec<FaceId> = m.top_faces().collect();
+    let (faces, geoms) = ugcheck::face_geoms(m);
     let points = |f: FaceId| -> Vec<Vec<DVec3>> {
         m.faces[f.idx()]
             .contours
@@ -109,7 +108,6 @@ pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
             .map(|c| c.iter().map(|&v| m.pos(v)).collect())
             .collect()
     };
-    let geoms: Vec<Option<FaceGeom>> = faces.iter().map(|&f| FaceGeom::new(points(f))).collect();
     let pairs: Vec<(usize, usize)> = ugcheck::classify_pairs(&geoms, eps)
         .into_iter()
         .filter(|p| p.2 == PairKind::Coincident)

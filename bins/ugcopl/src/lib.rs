@@ -17,12 +17,14 @@
 //! the points where the cuts meet neighbouring faces' edges are inserted into
 //! those edges (the grouper's T-vertex step), so no T-vertex is left.
 
-use geom::intersect::FaceGeom;
+pub mod pieces;
+
+use geom::DVec2;
 use geom::overlap::split_by;
-use geom::{DVec2, DVec3};
-use rustc_hash::{FxHashMap, FxHashSet};
-use ug::{Face, FaceId, Item, Model, Vertex, VertexId};
+use ug::{Item, Model};
 use ugcheck::PairKind;
+
+use crate::pieces::{Rebuild, face_geoms, perimeter, segments};
 
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Stats {
@@ -33,57 +35,9 @@ pub struct Stats {
     pub tvertices: usize,
 }
 
-/// Vertices found by position (within eps) or created.
-struct Points {
-    eps: f64,
-    cell: f64,
-    grid: FxHashMap<(i64, i64, i64), Vec<VertexId>>,
-}
-
-impl Points {
-    fn key(&self, p: DVec3) -> (i64, i64, i64) {
-        let k = (p / self.cell).floor();
-        (k.x as i64, k.y as i64, k.z as i64)
-    }
-    fn add(&mut self, p: DVec3, v: VertexId) {
-        let k = self.key(p);
-        self.grid.entry(k).or_default().push(v);
-    }
-    fn find(&self, vertices: &[Vertex], p: DVec3) -> Option<VertexId> {
-        let (x, y, z) = self.key(p);
-        let mut best: Option<(f64, VertexId)> = None;
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    for &v in self
-                        .grid
-                        .get(&(x + dx, y + dy, z + dz))
-                        .into_iter()
-                        .flatten()
-                    {
-                        let d = (vertices[v.idx()].pos - p).length();
-                        if d <= self.eps && best.is_none_or(|(b, w)| d < b || (d == b && v < w)) {
-                            best = Some((d, v));
-                        }
-                    }
-                }
-            }
-        }
-        best.map(|b| b.1)
-    }
-}
-
 /// Cuts the coplanar overlapping faces of a flat model.
 pub fn copl(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
-    let faces: Vec<FaceId> = m.top_faces().collect();
-    let points3 = |f: FaceId| -> Vec<Vec<DVec3>> {
-        m.faces[f.idx()]
-            .contours
-            .iter()
-            .map(|c| c.iter().map(|&v| m.pos(v)).collect())
-            .collect()
-    };
-    let geoms: Vec<Option<FaceGeom>> = faces.iter().map(|&f| FaceGeom::new(points3(f))).collect();
+    let (faces, geoms) = face_geoms(m);
     let pairs: Vec<(usize, usize)> = ugcheck::classify_pairs(&geoms, eps)
         .into_iter()
         .filter(|p| matches!(p.2, PairKind::Overlap(_)))
@@ -102,38 +56,20 @@ pub fn copl(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
         others[j].push(i);
     }
     let mesh = winged::Mesh::from_model(m.clone());
-    let mut out = m.clone();
-    out.items.clear();
-    out.faces.clear();
-    let mut pts = Points {
-        eps,
-        cell: (2.0 * eps).max(f64::MIN_POSITIVE),
-        grid: FxHashMap::default(),
-    };
-    for (k, v) in m.vertices.iter().enumerate() {
-        pts.add(v.pos, VertexId(k as u32));
-    }
-    let mut names: FxHashSet<String> = m.faces.iter().filter_map(|f| f.name.clone()).collect();
-    let mut vnames: FxHashSet<String> = m.vertices.iter().map(|v| v.name.clone()).collect();
-    let mut emitted = m.vertices.len();
     let mut order = vec![usize::MAX; m.faces.len()];
     for (k, &f) in faces.iter().enumerate() {
         order[f.idx()] = k;
     }
+    let mut rb = Rebuild::new(m, eps);
     for it in &m.items {
         let Item::Face(f) = it else {
-            out.items.push(it.clone());
+            rb.pass(it);
             continue;
         };
         let k = order[f.idx()];
         let face = &m.faces[f.idx()];
-        let push = |out: &mut Model, face: Face| {
-            let id = FaceId(out.faces.len() as u32);
-            out.faces.push(face);
-            out.items.push(Item::Face(id));
-        };
         let (Some(g), false) = (geoms[k].as_ref(), others[k].is_empty()) else {
-            push(&mut out, face.clone());
+            rb.face(face.clone());
             continue;
         };
         let cutters: Vec<Vec<Vec<DVec2>>> = others[k]
@@ -146,112 +82,41 @@ pub fn copl(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
                     .collect()
             })
             .collect();
-        let perim: f64 = g
-            .contours_2d
-            .iter()
-            .map(|c| {
-                (0..c.len())
-                    .map(|i| (c[(i + 1) % c.len()] - c[i]).length())
-                    .sum::<f64>()
-            })
-            .sum();
-        let pieces = split_by(&g.contours_2d, &cutters, eps * perim);
-        // Exact f64 positions for the points the booleans rounded: on the
-        // face's edges and the other faces' edges.
-        let features: Vec<(DVec2, DVec2)> = g
-            .contours_2d
-            .iter()
-            .chain(cutters.iter().flatten())
-            .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
-            .collect();
-        let (blo, bhi) =
-            geom::index::bbox(g.contours_2d.iter().flatten().map(|p| p.extend(0.0)), 0.0);
-        let tol = 1e-7 * (bhi - blo).length().max(eps);
+        let pieces = split_by(&g.contours_2d, &cutters, eps * perimeter(&g.contours_2d));
         if pieces.len() <= 1 {
-            push(&mut out, face.clone());
+            rb.face(face.clone());
             continue;
         }
+        // Exact f64 positions for the points the booleans rounded: on the
+        // face's edges and the other faces' edges.
+        let features = segments(g.contours_2d.iter().chain(cutters.iter().flatten()));
+        let (lo, hi) =
+            geom::index::bbox(g.contours_2d.iter().flatten().map(|p| p.extend(0.0)), 0.0);
+        let tol = 1e-7 * (hi - lo).length().max(eps);
         stats.faces_cut += 1;
         let base = face.name.clone().unwrap_or_else(|| format!("f{}", k + 1));
-        let origin_area = ugclean::surface_area(&mesh, *f, eps);
-        let mut nv = 0usize;
-        let mut piece_no = 0usize;
-        for piece in pieces {
-            let mut contours: Vec<Vec<VertexId>> = Vec::new();
-            for ring in piece {
-                let mut c: Vec<VertexId> = Vec::with_capacity(ring.len());
-                for p2 in ring {
-                    let p = g
-                        .frame
-                        .to_3d(geom::overlap::refine_point(p2, &features, tol));
-                    let v = match pts.find(&out.vertices, p) {
-                        Some(v) => v,
-                        None => {
-                            nv += 1;
-                            let mut name = format!("{base}.x{nv}");
-                            while vnames.contains(&name) {
-                                nv += 1;
-                                name = format!("{base}.x{nv}");
-                            }
-                            vnames.insert(name.clone());
-                            let id = VertexId(out.vertices.len() as u32);
-                            out.vertices.push(Vertex {
-                                name,
-                                pos: p,
-                                color: None,
-                            });
-                            pts.add(p, id);
-                            stats.new_vertices += 1;
-                            id
-                        }
-                    };
-                    if c.last() != Some(&v) {
-                        c.push(v);
-                    }
-                }
-                while c.len() > 1 && c.first() == c.last() {
-                    c.pop();
-                }
-                if c.len() >= 3 {
-                    contours.push(c);
-                }
-            }
-            if contours.is_empty() {
-                continue;
-            }
-            for v in emitted..out.vertices.len() {
-                out.items.push(Item::Vertex(VertexId(v as u32)));
-            }
-            emitted = out.vertices.len();
-            let name = face.name.as_ref().map(|_| {
-                loop {
-                    piece_no += 1;
-                    let cand = format!("{base}.c{piece_no}");
-                    if names.insert(cand.clone()) {
-                        break cand;
-                    }
-                }
-            });
-            out.items.push(Item::Comment(format!(
-                "ugcopl origin {base} area {origin_area}"
-            )));
-            push(
-                &mut out,
-                Face {
-                    name,
-                    contours,
-                    material: face.material,
-                },
-            );
-            stats.pieces += 1;
-        }
+        let note = format!(
+            "ugcopl origin {base} area {}",
+            ugclean::surface_area(&mesh, *f, eps)
+        );
+        stats.pieces += rb.pieces(
+            face,
+            &base,
+            "c",
+            pieces,
+            &g.frame,
+            &features,
+            tol,
+            Some(&note),
+        );
     }
+    stats.new_vertices = rb.new_vertices;
     // Where the cuts meet neighbouring edges: insert the points (no T-vertex).
     let opts = ugvlmerge::Options {
         merge_faces: false,
         ..ugvlmerge::Options::new(eps)
     };
-    let (out, vst) = ugvlmerge::vlmerge(out, &opts)?;
+    let (out, vst) = ugvlmerge::vlmerge(rb.out, &opts)?;
     stats.tvertices = vst.tvertices;
     Ok((out, stats))
 }

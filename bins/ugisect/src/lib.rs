@@ -19,9 +19,9 @@
 use geom::intersect::FaceGeom;
 use geom::overlap::split_by;
 use geom::{DVec2, DVec3};
-use rustc_hash::{FxHashMap, FxHashSet};
-use ug::{Face, FaceId, Item, Model, Vertex, VertexId};
+use ug::{Item, Model};
 use ugcheck::PairKind;
+use ugcopl::pieces::{Rebuild, face_geoms, perimeter, segments};
 
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Stats {
@@ -46,15 +46,7 @@ fn plane_line(a: &FaceGeom, b: &FaceGeom) -> Option<(DVec3, DVec3)> {
 
 /// Cuts the intersecting faces of a flat model.
 pub fn isect(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
-    let faces: Vec<FaceId> = m.top_faces().collect();
-    let points3 = |f: FaceId| -> Vec<Vec<DVec3>> {
-        m.faces[f.idx()]
-            .contours
-            .iter()
-            .map(|c| c.iter().map(|&v| m.pos(v)).collect())
-            .collect()
-    };
-    let geoms: Vec<Option<FaceGeom>> = faces.iter().map(|&f| FaceGeom::new(points3(f))).collect();
+    let (faces, geoms) = face_geoms(m);
     let pairs: Vec<(usize, usize)> = ugcheck::classify_pairs(&geoms, eps)
         .into_iter()
         .filter(|p| p.2 == PairKind::Intersect)
@@ -77,39 +69,20 @@ pub fn isect(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
             lines[j].push(l);
         }
     }
-    let mut out = m.clone();
-    out.items.clear();
-    out.faces.clear();
-    let cell = (2.0 * eps).max(f64::MIN_POSITIVE);
-    let key = |p: DVec3| {
-        let k = (p / cell).floor();
-        (k.x as i64, k.y as i64, k.z as i64)
-    };
-    let mut grid: FxHashMap<(i64, i64, i64), Vec<VertexId>> = FxHashMap::default();
-    for (k, v) in m.vertices.iter().enumerate() {
-        grid.entry(key(v.pos)).or_default().push(VertexId(k as u32));
-    }
-    let mut names: FxHashSet<String> = m.faces.iter().filter_map(|f| f.name.clone()).collect();
-    let mut vnames: FxHashSet<String> = m.vertices.iter().map(|v| v.name.clone()).collect();
-    let mut emitted = m.vertices.len();
     let mut order = vec![usize::MAX; m.faces.len()];
     for (k, &f) in faces.iter().enumerate() {
         order[f.idx()] = k;
     }
+    let mut rb = Rebuild::new(m, eps);
     for it in &m.items {
         let Item::Face(f) = it else {
-            out.items.push(it.clone());
+            rb.pass(it);
             continue;
         };
         let k = order[f.idx()];
         let face = &m.faces[f.idx()];
-        let push = |out: &mut Model, face: Face| {
-            let id = FaceId(out.faces.len() as u32);
-            out.faces.push(face);
-            out.items.push(Item::Face(id));
-        };
         let (Some(g), false) = (geoms[k].as_ref(), lines[k].is_empty()) else {
-            push(&mut out, face.clone());
+            rb.face(face.clone());
             continue;
         };
         // Each cutting line as a half-plane polygon covering the face generously.
@@ -147,125 +120,29 @@ pub fn isect(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
                 base - d * r + n * r,
             ]]);
         }
-        let perim: f64 = g
-            .contours_2d
-            .iter()
-            .map(|c| {
-                (0..c.len())
-                    .map(|i| (c[(i + 1) % c.len()] - c[i]).length())
-                    .sum::<f64>()
-            })
-            .sum();
-        let pieces = split_by(&g.contours_2d, &halves, eps * perim);
+        let pieces = split_by(&g.contours_2d, &halves, eps * perimeter(&g.contours_2d));
+        if pieces.len() <= 1 {
+            rb.face(face.clone());
+            continue;
+        }
         // Exact f64 positions for the points the booleans rounded: on the
         // face's edges and the cutting lines.
-        let mut features: Vec<(DVec2, DVec2)> = g
-            .contours_2d
-            .iter()
-            .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
-            .collect();
+        let mut features = segments(&g.contours_2d);
         features.extend(
             seen.iter()
                 .map(|&(q, d)| (q - d * 2.0 * r, q + d * 2.0 * r)),
         );
         let tol = 1e-7 * (hi - lo).length().max(eps);
-        if pieces.len() <= 1 {
-            push(&mut out, face.clone());
-            continue;
-        }
         stats.faces_cut += 1;
         let base = face.name.clone().unwrap_or_else(|| format!("f{}", k + 1));
-        let mut nv = 0usize;
-        let mut piece_no = 0usize;
-        for piece in pieces {
-            let mut contours: Vec<Vec<VertexId>> = Vec::new();
-            for ring in piece {
-                let mut c: Vec<VertexId> = Vec::with_capacity(ring.len());
-                for p2 in ring {
-                    let p = g
-                        .frame
-                        .to_3d(geom::overlap::refine_point(p2, &features, tol));
-                    let (x, y, z) = key(p);
-                    let mut found: Option<(f64, VertexId)> = None;
-                    for dx in -1..=1 {
-                        for dy in -1..=1 {
-                            for dz in -1..=1 {
-                                for &v in grid.get(&(x + dx, y + dy, z + dz)).into_iter().flatten()
-                                {
-                                    let dd = (out.vertices[v.idx()].pos - p).length();
-                                    if dd <= eps
-                                        && found.is_none_or(|(b, w)| dd < b || (dd == b && v < w))
-                                    {
-                                        found = Some((dd, v));
-                                    }
-                                }
-                            }
-                        }
-                    }
-                    let v = match found {
-                        Some((_, v)) => v,
-                        None => {
-                            nv += 1;
-                            let mut name = format!("{base}.y{nv}");
-                            while vnames.contains(&name) {
-                                nv += 1;
-                                name = format!("{base}.y{nv}");
-                            }
-                            vnames.insert(name.clone());
-                            let id = VertexId(out.vertices.len() as u32);
-                            out.vertices.push(Vertex {
-                                name,
-                                pos: p,
-                                color: None,
-                            });
-                            grid.entry(key(p)).or_default().push(id);
-                            stats.new_vertices += 1;
-                            id
-                        }
-                    };
-                    if c.last() != Some(&v) {
-                        c.push(v);
-                    }
-                }
-                while c.len() > 1 && c.first() == c.last() {
-                    c.pop();
-                }
-                if c.len() >= 3 {
-                    contours.push(c);
-                }
-            }
-            if contours.is_empty() {
-                continue;
-            }
-            for v in emitted..out.vertices.len() {
-                out.items.push(Item::Vertex(VertexId(v as u32)));
-            }
-            emitted = out.vertices.len();
-            let name = face.name.as_ref().map(|_| {
-                loop {
-                    piece_no += 1;
-                    let cand = format!("{base}.i{piece_no}");
-                    if names.insert(cand.clone()) {
-                        break cand;
-                    }
-                }
-            });
-            push(
-                &mut out,
-                Face {
-                    name,
-                    contours,
-                    material: face.material,
-                },
-            );
-            stats.pieces += 1;
-        }
+        stats.pieces += rb.pieces(face, &base, "i", pieces, &g.frame, &features, tol, None);
     }
+    stats.new_vertices = rb.new_vertices;
     let opts = ugvlmerge::Options {
         merge_faces: false,
         ..ugvlmerge::Options::new(eps)
     };
-    let (out, vst) = ugvlmerge::vlmerge(out, &opts)?;
+    let (out, vst) = ugvlmerge::vlmerge(rb.out, &opts)?;
     stats.tvertices = vst.tvertices;
     Ok((out, stats))
 }
