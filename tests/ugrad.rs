@@ -259,3 +259,50 @@ fn deterministic_at_any_thread_count() {
     let _ = std::fs::remove_file(&path);
     assert!(a == b, "output differs between 1 and 2 threads");
 }
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_writes_the_solution_so_far() {
+    use std::io::Write as _;
+    use std::process::Stdio;
+    let input = patches("cornell-box.ug", "50");
+    let mut child = Command::new(bin("ugrad"))
+        .args(["--converge", "1e-9"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(input.as_bytes())
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "{:?}", out.status);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("interrupted"));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let m = ug::parse(text.as_bytes(), "partial").unwrap().model;
+    assert!(m.faces.len() > 700);
+    assert!(m.vertices.iter().all(|v| v.color.is_some()));
+}
+
+#[test]
+fn time_limit_stops_and_writes() {
+    let input = patches("cornell-box.ug", "50");
+    let out = run(
+        "ugrad",
+        &["-v", "--converge", "1e-9", "--time-limit", "1"],
+        Some(input.as_bytes()),
+    );
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("stopped (TimeLimit)"));
+    assert!(ug::parse(&out.stdout, "partial").is_ok());
+}
