@@ -24,10 +24,10 @@
 use std::collections::hash_map::Entry;
 use std::time::{Duration, Instant};
 
-use geom::{BoxIndex, DVec2, DVec3, Frame, Plane, newell_normal, point_segment_distance};
+use geom::{BoxIndex, DVec3, Plane, newell_normal, point_segment_distance};
 use rustc_hash::{FxHashMap, FxHashSet};
 use ug::{FaceId, Model, VertexId};
-use winged::{EdgeId, Mesh, Repair};
+use winged::{EdgeId, HalfEdge, Mesh, Repair, outer_first, trace_loops};
 
 /// Default largest angle between the normals of faces that are joined, in degrees.
 pub const DEFAULT_ANGLE: f64 = 1.0;
@@ -753,24 +753,6 @@ fn swallowing(
     bad
 }
 
-#[derive(Clone, Copy, Debug)]
-struct Half {
-    from: VertexId,
-    to: VertexId,
-    /// (member, contour, index): the deterministic order of half-edges.
-    key: (u32, u32, u32),
-}
-
-/// Clockwise angle from `r` to `d`, in (0, 2π]; 2π for the same direction.
-fn cw_angle(r: DVec2, d: DVec2) -> f64 {
-    let cw = -r.perp_dot(d).atan2(r.dot(d));
-    if cw <= 0.0 {
-        cw + std::f64::consts::TAU
-    } else {
-        cw
-    }
-}
-
 /// The contours of the union of a group of faces: the half-edges of all
 /// their contours less the seams inside the group, paired at each vertex
 /// turning as far left as possible (in the plane of normal `n`, so traced
@@ -784,7 +766,7 @@ fn trace_group(
     n: DVec3,
     in_group: &dyn Fn(FaceId) -> bool,
 ) -> Option<Vec<Vec<VertexId>>> {
-    let mut halves: Vec<Half> = Vec::new();
+    let mut halves: Vec<HalfEdge> = Vec::new();
     for (mi, &f) in members.iter().enumerate() {
         for (ci, c) in mesh.face(f).contours.iter().enumerate() {
             let es = mesh.contour_edges(f, ci);
@@ -794,7 +776,7 @@ fn trace_group(
                 if is_seam(mesh, e) && mesh.edge(e).uses.iter().all(|u| in_group(u.face)) {
                     continue;
                 }
-                halves.push(Half {
+                halves.push(HalfEdge {
                     from: c[i],
                     to: c[(i + 1) % k],
                     key: (mi as u32, ci as u32, i as u32),
@@ -802,137 +784,9 @@ fn trace_group(
             }
         }
     }
-    if halves.is_empty() {
-        return None;
-    }
-    let frame = Frame::new(mesh.pos(halves[0].from), n);
-    let p2 = |v: VertexId| frame.to_2d(mesh.pos(v));
-
-    // Pair incoming with outgoing half-edges at each vertex.
-    let mut incoming: Vec<(VertexId, usize)> =
-        halves.iter().enumerate().map(|(i, h)| (h.to, i)).collect();
-    let mut outgoing: Vec<(VertexId, usize)> = halves
-        .iter()
-        .enumerate()
-        .map(|(i, h)| (h.from, i))
-        .collect();
-    incoming.sort_unstable();
-    outgoing.sort_unstable();
-    let mut next = vec![usize::MAX; halves.len()];
-    let (mut a, mut b) = (0, 0);
-    while a < incoming.len() {
-        let v = incoming[a].0;
-        let a_end = a + incoming[a..].iter().take_while(|x| x.0 == v).count();
-        if b >= outgoing.len() || outgoing[b].0 != v {
-            return None;
-        }
-        let b_end = b + outgoing[b..].iter().take_while(|x| x.0 == v).count();
-        let (ins, outs) = (&incoming[a..a_end], &outgoing[b..b_end]);
-        if ins.len() != outs.len() {
-            return None;
-        }
-        if ins.len() == 1 {
-            next[ins[0].1] = outs[0].1;
-        } else {
-            let pv = p2(v);
-            let mut used = vec![false; outs.len()];
-            for &(_, hi) in ins {
-                let r = p2(halves[hi].from) - pv;
-                let mut best: Option<(f64, bool, usize)> = None;
-                for (k, &(_, ho)) in outs.iter().enumerate() {
-                    if used[k] {
-                        continue;
-                    }
-                    let d = p2(halves[ho].to) - pv;
-                    let cand = (cw_angle(r, d), halves[ho].to == halves[hi].from, k);
-                    let better = best.is_none_or(|bb| {
-                        cand.0
-                            .total_cmp(&bb.0)
-                            .then(cand.1.cmp(&bb.1))
-                            .then(halves[outs[cand.2].1].key.cmp(&halves[outs[bb.2].1].key))
-                            .is_lt()
-                    });
-                    if better {
-                        best = Some(cand);
-                    }
-                }
-                let k = best?.2;
-                used[k] = true;
-                next[hi] = outs[k].1;
-            }
-        }
-        a = a_end;
-        b = b_end;
-    }
-    if b != outgoing.len() {
-        return None;
-    }
-
-    // Follow the pairing into loops; split loops at repeated vertices.
-    let mut visited = vec![false; halves.len()];
-    let mut loops: Vec<Vec<usize>> = Vec::new();
-    for start in 0..halves.len() {
-        if visited[start] {
-            continue;
-        }
-        let mut lp = Vec::new();
-        let mut h = start;
-        while !visited[h] {
-            visited[h] = true;
-            lp.push(h);
-            h = next[h];
-        }
-        split_loop(&halves, lp, &mut loops);
-    }
-    loops.retain(|lp| lp.len() >= 3);
-    for lp in &mut loops {
-        let k = (0..lp.len()).min_by_key(|&i| halves[lp[i]].key)?;
-        lp.rotate_left(k);
-    }
-    loops.sort_by_key(|lp| halves[lp[0]].key);
-    let contours: Vec<Vec<VertexId>> = loops
-        .iter()
-        .map(|lp| lp.iter().map(|&h| halves[h].from).collect())
-        .collect();
-    let areas: Vec<f64> = contours
-        .iter()
-        .map(|c| {
-            let pts: Vec<DVec3> = c.iter().map(|&v| mesh.pos(v)).collect();
-            newell_normal(&pts).dot(n) / 2.0
-        })
-        .collect();
-    let mut outer: Option<usize> = None;
-    for (i, &ar) in areas.iter().enumerate() {
-        if ar > 0.0 && outer.is_none_or(|o| ar > areas[o]) {
-            outer = Some(i);
-        }
-    }
-    let outer = outer?;
-    let mut rest = contours;
-    let mut result = vec![rest.remove(outer)];
-    result.extend(rest);
-    Some(result)
-}
-
-/// Splits a closed loop of half-edges into loops that visit each vertex once.
-fn split_loop(halves: &[Half], lp: Vec<usize>, out: &mut Vec<Vec<usize>>) {
-    let mut stack: Vec<usize> = Vec::with_capacity(lp.len());
-    let mut at: FxHashMap<VertexId, usize> = FxHashMap::default(); // lookup only
-    for h in lp {
-        let v = halves[h].from;
-        if let Some(&p) = at.get(&v) {
-            let sub = stack.split_off(p);
-            for &x in &sub {
-                at.remove(&halves[x].from);
-            }
-            out.push(sub);
-        }
-        at.insert(v, stack.len());
-        stack.push(h);
-    }
-    if !stack.is_empty() {
-        out.push(stack);
-    }
+    let pos = |v: VertexId| mesh.pos(v);
+    let loops = trace_loops(&halves, &pos, n)?;
+    outer_first(loops, &pos, n, false)
 }
 
 /// Drops, from every contour of face `f`, vertices that only `f` uses (two

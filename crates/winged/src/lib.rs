@@ -42,12 +42,14 @@
 mod merge;
 mod mesh;
 mod order;
+pub mod trace;
 mod validate;
 
 #[cfg(test)]
 mod tests;
 
 pub use mesh::Mesh;
+pub use trace::{HalfEdge, outer_first, trace_loops};
 pub use ug::{FaceId, MaterialId, VertexId};
 
 /// Index of an edge in a [`Mesh`]. Stable across edits; an edge that loses

@@ -12,15 +12,13 @@
 //! 5. The loop with the largest area wound like `a`'s outer contour is the
 //!    outer contour; the others are holes and islands.
 
-use std::collections::BTreeMap;
-use std::f64::consts::TAU;
-
-use geom::{Frame, newell_normal};
-use glam::{DVec2, DVec3};
+use geom::newell_normal;
+use glam::DVec3;
 use rustc_hash::FxHashMap;
 use ug::{FaceId, VertexId};
 
 use crate::mesh::Mesh;
+use crate::trace::{HalfEdge, outer_first, trace_loops};
 use crate::{EdgeId, MergeError};
 
 #[derive(Clone, Copy, Debug)]
@@ -30,12 +28,6 @@ struct Half {
     /// (0 for a / 1 for b, contour, index): the deterministic order of half-edges.
     key: (u8, u32, u32),
     edge: EdgeId,
-}
-
-/// Clockwise angle from `r` to `d`, in (0, 2π]; 2π for the same direction.
-fn cw_angle(r: DVec2, d: DVec2) -> f64 {
-    let cw = -r.perp_dot(d).atan2(r.dot(d));
-    if cw <= 0.0 { cw + TAU } else { cw }
 }
 
 pub(crate) fn merge(mesh: &mut Mesh, a: FaceId, b: FaceId) -> Result<FaceId, MergeError> {
@@ -149,114 +141,23 @@ pub(crate) fn merge(mesh: &mut Mesh, a: FaceId, b: FaceId) -> Result<FaceId, Mer
     } else {
         DVec3::Z
     };
-    let origin = pos(halves[0].from);
-    let frame = Frame::new(origin, n);
-    let p2 = |v: VertexId| frame.to_2d(pos(v));
 
-    // 3. Pair incoming with outgoing half-edges at each vertex.
-    let mut at_vertex: BTreeMap<VertexId, (Vec<usize>, Vec<usize>)> = BTreeMap::new();
-    for (i, h) in halves.iter().enumerate() {
-        if !dead[i] {
-            at_vertex.entry(h.to).or_default().0.push(i);
-            at_vertex.entry(h.from).or_default().1.push(i);
-        }
-    }
-    let mut next = vec![usize::MAX; halves.len()];
-    for (&v, (incoming, outgoing)) in &at_vertex {
-        if incoming.len() != outgoing.len() {
-            // Cannot happen for closed contours; refuse rather than corrupt.
-            return Err(MergeError::Degenerate);
-        }
-        if outgoing.len() == 1 {
-            next[incoming[0]] = outgoing[0];
-            continue;
-        }
-        let pv = p2(v);
-        let mut used = vec![false; outgoing.len()];
-        for &hi in incoming {
-            let r = p2(halves[hi].from) - pv;
-            let mut best: Option<(f64, bool, usize)> = None;
-            for (k, &ho) in outgoing.iter().enumerate() {
-                if used[k] {
-                    continue;
-                }
-                let d = p2(halves[ho].to) - pv;
-                let cand = (cw_angle(r, d), halves[ho].to == halves[hi].from, k);
-                let better = match best {
-                    None => true,
-                    Some(b) => cand
-                        .0
-                        .total_cmp(&b.0)
-                        .then(cand.1.cmp(&b.1))
-                        .then(halves[outgoing[cand.2]].key.cmp(&halves[outgoing[b.2]].key))
-                        .is_lt(),
-                };
-                if better {
-                    best = Some(cand);
-                }
-            }
-            let k = best.expect("as many outgoing as incoming").2;
-            used[k] = true;
-            next[hi] = outgoing[k];
-        }
-    }
-
-    // 4. Trace loops from the first unvisited half-edge, split at repeated vertices.
-    let mut visited = vec![false; halves.len()];
-    let mut loops: Vec<Vec<usize>> = Vec::new();
-    for start in 0..halves.len() {
-        if dead[start] || visited[start] {
-            continue;
-        }
-        let mut lp = Vec::new();
-        let mut h = start;
-        while !visited[h] {
-            visited[h] = true;
-            lp.push(h);
-            h = next[h];
-        }
-        split_loop(&halves, lp, &mut loops);
-    }
-    for lp in &mut loops {
-        let k = (0..lp.len())
-            .min_by_key(|&i| halves[lp[i]].key)
-            .expect("loops are not empty");
-        lp.rotate_left(k);
-    }
-    loops.retain(|lp| lp.len() >= 3); // vertices are distinct after splitting
+    // 3–5. Trace the remaining half-edges into contours, outer first.
+    let live: Vec<HalfEdge> = halves
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| !dead[i])
+        .map(|(_, h)| HalfEdge {
+            from: h.from,
+            to: h.to,
+            key: (h.key.0 as u32, h.key.1, h.key.2),
+        })
+        .collect();
+    let loops = trace_loops(&live, &pos, n).ok_or(MergeError::Degenerate)?;
     if loops.is_empty() {
         return Err(MergeError::Degenerate);
     }
-    loops.sort_by_key(|lp| halves[lp[0]].key);
-
-    // 5. Classify.
-    let contours: Vec<Vec<VertexId>> = loops
-        .iter()
-        .map(|lp| lp.iter().map(|&h| halves[h].from).collect())
-        .collect();
-    let areas: Vec<f64> = contours
-        .iter()
-        .map(|c| {
-            let pts: Vec<DVec3> = c.iter().map(|&v| pos(v)).collect();
-            newell_normal(&pts).dot(n) / 2.0
-        })
-        .collect();
-    let pick = |filter: &dyn Fn(f64) -> bool, measure: &dyn Fn(f64) -> f64| {
-        let mut best: Option<usize> = None;
-        for (i, &ar) in areas.iter().enumerate() {
-            if filter(ar) && best.is_none_or(|b| measure(ar) > measure(areas[b])) {
-                best = Some(i);
-            }
-        }
-        best
-    };
-    let outer = pick(&|ar| ar > 0.0, &|ar| ar)
-        .or_else(|| pick(&|_| true, &|ar| ar.abs()))
-        .expect("there is a loop");
-    let mut result = Vec::with_capacity(contours.len());
-    let mut rest = contours;
-    result.push(rest.remove(outer));
-    result.extend(rest);
+    let result = outer_first(loops, &pos, n, true).ok_or(MergeError::Degenerate)?;
 
     // Apply.
     mesh.detach(a);
@@ -266,40 +167,4 @@ pub(crate) fn merge(mesh: &mut Mesh, a: FaceId, b: FaceId) -> Result<FaceId, Mer
     mesh.attach(a);
     mesh.finish();
     Ok(a)
-}
-
-/// Splits a closed loop of half-edges into loops that visit each vertex once.
-fn split_loop(halves: &[Half], lp: Vec<usize>, out: &mut Vec<Vec<usize>>) {
-    let mut stack: Vec<usize> = Vec::with_capacity(lp.len());
-    let mut at: FxHashMap<VertexId, usize> = FxHashMap::default(); // lookup only
-    for h in lp {
-        let v = halves[h].from;
-        if let Some(&p) = at.get(&v) {
-            let sub = stack.split_off(p);
-            for &x in &sub {
-                at.remove(&halves[x].from);
-            }
-            out.push(sub);
-        }
-        at.insert(v, stack.len());
-        stack.push(h);
-    }
-    if !stack.is_empty() {
-        out.push(stack);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn cw_angles() {
-        let r = DVec2::new(0.0, -1.0);
-        let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
-        assert!(close(cw_angle(r, DVec2::new(-1.0, 0.0)), TAU / 4.0));
-        assert!(close(cw_angle(r, DVec2::new(0.0, 1.0)), TAU / 2.0));
-        assert!(close(cw_angle(r, DVec2::new(1.0, 0.0)), 3.0 * TAU / 4.0));
-        assert_eq!(cw_angle(r, DVec2::new(0.0, -2.0)), TAU);
-    }
 }
