@@ -47,16 +47,13 @@ fn ugcat(args: &[String], stdin: Option<&[u8]>) -> Output {
         .current_dir(root())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
-        .stdin(if stdin.is_some() {
-            Stdio::piped()
-        } else {
-            Stdio::null()
-        });
+        .stdin(Stdio::piped());
     let mut child = cmd.spawn().expect("start ugcat");
+    let mut si = child.stdin.take().expect("stdin");
     if let Some(input) = stdin {
-        let mut si = child.stdin.take().expect("stdin");
         let _ = si.write_all(input);
     }
+    drop(si); // EOF
     child.wait_with_output().expect("wait for ugcat")
 }
 

@@ -54,19 +54,18 @@ pub fn bin(name: &str) -> PathBuf {
 pub fn run(name: &str, args: &[&str], stdin: Option<&[u8]>) -> Output {
     let mut cmd = Command::new(bin(name));
     cmd.args(args).stdout(Stdio::piped()).stderr(Stdio::piped());
-    cmd.stdin(if stdin.is_some() {
-        Stdio::piped()
-    } else {
-        Stdio::null()
-    });
+    // Always a pipe, never Stdio::null(): on some CI containers /dev/null is a
+    // regular file that collects other processes' output.
+    cmd.stdin(Stdio::piped());
     let mut child = cmd
         .spawn()
         .unwrap_or_else(|e| panic!("cannot start {name}: {e}"));
+    let mut si = child.stdin.take().expect("stdin");
     if let Some(input) = stdin {
-        let mut si = child.stdin.take().expect("stdin");
         // The tool may exit before reading everything (e.g. on an early error).
         let _ = si.write_all(input);
     }
+    drop(si); // EOF
     child.wait_with_output().expect("wait for tool")
 }
 
