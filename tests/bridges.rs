@@ -1,0 +1,335 @@
+//! The format bridges end to end: obj2ug, ug2obj, ug2ply and mgf2ug on the
+//! fixtures in `fixtures/bridges/`, held against golden files and `ugcheck`.
+//! Build the tools first: `cargo build -p ugcheck -p ug2ply -p ug2obj -p obj2ug -p mgf2ug`.
+
+use std::collections::BTreeMap;
+
+use glam::DVec3;
+use ugkit::{assert_golden, fixture, run, run_ok};
+
+fn path(rel: &str) -> String {
+    fixture(rel).to_str().expect("UTF-8 path").to_string()
+}
+
+fn report(ug: &str) -> serde_json::Value {
+    let json = run_ok("ugcheck", &["--json", "-"], Some(ug.as_bytes()));
+    serde_json::from_str(&json).expect("valid JSON")
+}
+
+fn area(report: &serde_json::Value, material: &str) -> f64 {
+    report["area_by_material"]
+        .as_array()
+        .expect("area_by_material")
+        .iter()
+        .find(|m| m["material"] == material)
+        .and_then(|m| m["area"].as_f64())
+        .unwrap_or_else(|| panic!("no area for {material}"))
+}
+
+/// Area per `usemtl` material of an OBJ file's faces, computed here without
+/// obj2ug: Newell normals of the (planar) polygons.
+fn obj_areas(text: &str) -> BTreeMap<String, f64> {
+    let mut v: Vec<DVec3> = Vec::new();
+    let mut mat = String::new();
+    let mut out = BTreeMap::new();
+    for line in text.lines() {
+        let w: Vec<&str> = line.split_whitespace().collect();
+        match w.first() {
+            Some(&"v") => v.push(DVec3::new(
+                w[1].parse().unwrap(),
+                w[2].parse().unwrap(),
+                w[3].parse().unwrap(),
+            )),
+            Some(&"usemtl") => mat = w[1].to_string(),
+            Some(&"f") => {
+                let p: Vec<DVec3> = w[1..]
+                    .iter()
+                    .map(|r| {
+                        let i: i64 = r.split('/').next().unwrap().parse().unwrap();
+                        let k = if i > 0 { i - 1 } else { v.len() as i64 + i };
+                        v[k as usize]
+                    })
+                    .collect();
+                let mut n = DVec3::ZERO;
+                for k in 0..p.len() {
+                    n += p[k].cross(p[(k + 1) % p.len()]);
+                }
+                *out.entry(mat.clone()).or_insert(0.0) += n.length() / 2.0;
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+#[test]
+fn obj2ug_cube_is_clean_and_keeps_area_per_material() {
+    let ug = run_ok("obj2ug", &[&path("bridges/cube.obj")], None);
+    assert_golden("fixtures/bridges/golden/cube.ug", &ug);
+    let out = run(
+        "ugcheck",
+        &["--deny", "defects", "-q", "-"],
+        Some(ug.as_bytes()),
+    );
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    let r = report(&ug);
+    assert_eq!(
+        r["boundary_edges"].as_array().unwrap().len(),
+        0,
+        "the cube is closed"
+    );
+    let expected = obj_areas(&std::fs::read_to_string(fixture("bridges/cube.obj")).unwrap());
+    assert_eq!(expected.len(), 2);
+    for (m, a) in expected {
+        assert!(
+            (area(&r, &m) - a).abs() < 1e-12,
+            "{m}: {} vs {a}",
+            area(&r, &m)
+        );
+    }
+    assert_eq!(r["counts"]["emitters"], 1);
+}
+
+#[test]
+fn obj2ug_ngons_and_negative_indices() {
+    let out = run("obj2ug", &[&path("bridges/ngons.obj")], None);
+    assert!(out.status.success());
+    let ug = String::from_utf8(out.stdout).unwrap();
+    assert_golden("fixtures/bridges/golden/ngons.ug", &ug);
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr
+            .contains("ngons.obj:17:1: warning: face with fewer than 3 distinct vertices dropped"),
+        "{stderr}"
+    );
+    let r = report(&ug);
+    assert_eq!(r["counts"]["faces"], 3);
+    assert_eq!(r["counts"]["wires"], 1);
+    assert_eq!(r["degenerate"].as_array().unwrap().len(), 0);
+}
+
+/// obj2ug | ug2obj | obj2ug gives back the same UG, byte for byte.
+fn round_trip(rel: &str) {
+    let first = run_ok("obj2ug", &[&path(rel)], None);
+    let dir = tempfile::tempdir().unwrap();
+    let ug = dir.path().join("a.ug");
+    std::fs::write(&ug, &first).unwrap();
+    let obj = dir.path().join("b.obj");
+    run_ok(
+        "ug2obj",
+        &[ug.to_str().unwrap(), "-o", obj.to_str().unwrap()],
+        None,
+    );
+    let text = std::fs::read_to_string(&obj).unwrap();
+    assert!(text.contains("\nmtllib b.mtl\n"), "{text}");
+    assert!(dir.path().join("b.mtl").exists());
+    let second = run_ok("obj2ug", &[obj.to_str().unwrap()], None);
+    assert_eq!(first, second, "{rel}: not stable through ug2obj");
+}
+
+#[test]
+fn obj_round_trip_is_stable() {
+    round_trip("bridges/cube.obj");
+    round_trip("bridges/ngons.obj");
+}
+
+#[test]
+fn ug2obj_lit_model_and_mtl_on_request() {
+    let dir = tempfile::tempdir().unwrap();
+    let mtl = dir.path().join("lit.mtl");
+    let obj = run_ok(
+        "ug2obj",
+        &[
+            &path("bridges/lit-square.ug"),
+            "--mtl",
+            mtl.to_str().unwrap(),
+        ],
+        None,
+    );
+    assert!(obj.contains("v 0 0 0 1.0000 1.0000 1.0000\n"), "{obj}");
+    assert_golden(
+        "fixtures/bridges/golden/lit-square.obj",
+        &obj.replace(mtl.to_str().unwrap(), "lit.mtl"),
+    );
+    let mtl = std::fs::read_to_string(&mtl).unwrap();
+    assert_eq!(
+        mtl,
+        "# written by ug2obj\nnewmtl floor\nKd 0.8 0.8 0.8\nKe 0 0 0\n"
+    );
+    // To stdout without --mtl: no mtllib line, no MTL file.
+    let obj = run_ok("ug2obj", &[&path("bridges/lit-square.ug")], None);
+    assert!(!obj.contains("mtllib"), "{obj}");
+}
+
+#[test]
+fn ug2ply_lit_model_golden_and_binary() {
+    let ply = run_ok("ug2ply", &[&path("bridges/lit-square.ug")], None);
+    assert_golden("fixtures/bridges/golden/lit-square.ply", &ply);
+    let bright = run_ok(
+        "ug2ply",
+        &["--exposure", "2", &path("bridges/lit-square.ug")],
+        None,
+    );
+    // B = (0.5, 0.25, 0.125): B/pi * 4 = (0.64, 0.32, 0.16) -> sRGB 209 153 111
+    assert!(
+        bright.contains("\n1 0 0 0.5 0.25 0.125 209 153 111\n"),
+        "{bright}"
+    );
+    let bin = run(
+        "ug2ply",
+        &["--binary", &path("bridges/lit-square.ug")],
+        None,
+    );
+    assert!(bin.status.success());
+    let end = b"end_header\n";
+    let at = bin
+        .stdout
+        .windows(end.len())
+        .position(|w| w == end)
+        .unwrap()
+        + end.len();
+    assert!(
+        bin.stdout
+            .starts_with(b"ply\nformat binary_little_endian 1.0\n")
+    );
+    // 4 vertices of 3 doubles, 3 floats, 3 uchars; one quad of a uchar and 4 ints.
+    assert_eq!(bin.stdout.len() - at, 4 * (24 + 12 + 3) + 1 + 16);
+}
+
+/// Counts from a PLY header.
+fn ply_counts(ply: &str) -> (usize, usize) {
+    let count = |el: &str| -> usize {
+        ply.lines()
+            .find_map(|l| l.strip_prefix(&format!("element {el} ")))
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("no element {el}"))
+    };
+    (count("vertex"), count("face"))
+}
+
+#[test]
+fn ug2ply_cornell_box_counts() {
+    let ply = run_ok("ug2ply", &[&path("cornell-box.ug")], None);
+    let model = ug::parse_file(&fixture("cornell-box.ug"), &Default::default())
+        .unwrap()
+        .model;
+    // Every face is a quad without holes: one polygon each; vertices are not
+    // shared between materials here, so one PLY vertex per UG vertex used.
+    assert_eq!(model.faces.len(), 16);
+    assert_eq!(ply_counts(&ply), (64, 16));
+    assert!(
+        ply.contains("property uchar red\n") && !ply.contains("radiosity"),
+        "unlit"
+    );
+    let body: Vec<&str> = ply.split("end_header\n").nth(1).unwrap().lines().collect();
+    assert_eq!(body.len(), 64 + 16);
+    assert!(body[64..].iter().all(|l| l.starts_with("4 ")));
+    // The converted MGF box: the ceiling with its hole is triangulated.
+    let ug = run_ok("mgf2ug", &[&path("bridges/cornell.mgf")], None);
+    let ply = run_ok("ug2ply", &["-"], Some(ug.as_bytes()));
+    let m = ug::parse(ug.as_bytes(), "<mgf>").unwrap().model;
+    let holes: Vec<usize> = m
+        .faces
+        .iter()
+        .filter(|f| f.contours.len() > 1)
+        .map(|f| f.contours.iter().map(Vec::len).sum::<usize>())
+        .collect();
+    assert_eq!(holes, [8], "one face with a hole: 4 + 4 corners");
+    // A square ring of 8 corners is 8 triangles.
+    assert_eq!(ply_counts(&ply).1, m.faces.len() - 1 + 8);
+}
+
+#[test]
+fn mgf2ug_cornell_box() {
+    let out = run("mgf2ug", &[&path("bridges/cornell.mgf")], None);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        out.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let ug = String::from_utf8(out.stdout).unwrap();
+    assert_golden("fixtures/bridges/golden/cornell.ug", &ug);
+    let r = report(&ug);
+    assert!((area(&r, "lamp") - 0.0225).abs() < 1e-12);
+    assert!((area(&r, "red") - 0.55 * 0.56).abs() < 1e-12);
+    assert!((area(&r, "green") - 0.55 * 0.56).abs() < 1e-12);
+    assert_eq!(r["counts"]["emitters"], 1);
+    // Sphere (16 × 8), cylinder and cap (16 + 16), three prisms (3 × 6), five walls, lamp.
+    assert_eq!(r["counts"]["faces"], 128 + 32 + 18 + 5 + 1);
+    // Orientation is consistent everywhere (primitives, mirrored and included parts).
+    assert_eq!(r["inconsistent"].as_array().unwrap().len(), 0);
+    assert_eq!(r["degenerate"].as_array().unwrap().len(), 0);
+    assert_eq!(r["nonplanar"].as_array().unwrap().len(), 0);
+    // Same bytes from stdin (includes resolved from the current directory).
+    let src = std::fs::read(fixture("bridges/cornell.mgf")).unwrap();
+    let out = std::process::Command::new(ugkit::bin("mgf2ug"))
+        .current_dir(fixture("bridges"))
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .and_then(|mut c| {
+            use std::io::Write;
+            c.stdin.take().unwrap().write_all(&src)?;
+            c.wait_with_output()
+        })
+        .unwrap();
+    assert_eq!(String::from_utf8(out.stdout).unwrap(), ug);
+}
+
+#[test]
+fn importer_errors_are_positioned_and_write_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&str, &str, &str, &str); 4] = [
+        (
+            "obj2ug",
+            "bad.obj",
+            "v 0 0 0\nf 1 2 3\n",
+            "bad.obj:2:5: error: vertex index 2 is out of range",
+        ),
+        (
+            "obj2ug",
+            "nomtl.obj",
+            "mtllib missing.mtl\n",
+            "nomtl.obj:1:8: error: cannot read material library 'missing.mtl'",
+        ),
+        (
+            "mgf2ug",
+            "bad.mgf",
+            "v a =\np 0 0 zero\n",
+            "bad.mgf:2:7: error: bad number 'zero' (expected z)",
+        ),
+        (
+            "mgf2ug",
+            "strict.mgf",
+            "frob\n",
+            "strict.mgf:1:1: error: unknown entity 'frob'",
+        ),
+    ];
+    for (tool, name, text, msg) in cases {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        let out = run(tool, &["--strict", p.to_str().unwrap()], None);
+        assert_eq!(out.status.code(), Some(2), "{tool} {name}");
+        assert!(out.stdout.is_empty());
+        let stderr = String::from_utf8(out.stderr).unwrap();
+        let shown = format!("{}/{msg}", dir.path().display());
+        assert!(stderr.starts_with(&shown), "{stderr}\nexpected {shown}");
+    }
+    // From stdin the file is <stdin>.
+    let out = run("obj2ug", &[], Some(b"v 0 0 0\nf 1 1 x\n"));
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(
+        String::from_utf8(out.stderr).unwrap(),
+        "<stdin>:2:7: error: bad vertex reference 'x'\n"
+    );
+}
