@@ -107,7 +107,8 @@ enum BackendArg {
 }
 
 fn main() -> std::process::ExitCode {
-    quiet_mesa();
+    // SAFETY: first thing in main, before any thread exists.
+    unsafe { gpu::prepare_env() };
     let args = Args::parse();
     cli::run(|| {
         let c = &args.common;
@@ -183,21 +184,4 @@ fn main() -> std::process::ExitCode {
             .map_err(|e| cli::Failure::runtime(format!("error: {e}")))?;
         c.write(&png)
     })
-}
-
-/// Mesa's Wayland loader complains when XDG_RUNTIME_DIR is unset (headless
-/// machines, CI): point it at a private directory before any thread starts.
-fn quiet_mesa() {
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        let dir = std::env::temp_dir().join("ugkit-runtime");
-        if std::fs::create_dir_all(&dir).is_ok() {
-            #[cfg(unix)]
-            {
-                use std::os::unix::fs::PermissionsExt;
-                let _ = std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700));
-            }
-            // SAFETY: called first thing in main, before any other thread exists.
-            unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
-        }
-    }
 }

@@ -372,6 +372,27 @@ pub fn test_device() -> Option<Gpu> {
     }
 }
 
+/// Mesa's Wayland loader prints an error when `XDG_RUNTIME_DIR` is unset
+/// (headless machines, CI): point it at a private temporary directory.
+///
+/// # Safety
+/// Sets an environment variable: call it before any other thread exists
+/// (first thing in `main`).
+pub unsafe fn prepare_env() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        let dir = std::env::temp_dir().join("ugkit-runtime");
+        if std::fs::create_dir_all(&dir).is_ok() {
+            #[cfg(unix)]
+            {
+                use std::os::unix::fs::PermissionsExt;
+                let _ = std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700));
+            }
+            // SAFETY: the caller guarantees no other thread exists yet.
+            unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
+        }
+    }
+}
+
 /// True when `UG_REQUIRE_GPU=1`: GPU tests must run.
 pub fn require_gpu() -> bool {
     std::env::var("UG_REQUIRE_GPU").is_ok_and(|v| v == "1")
