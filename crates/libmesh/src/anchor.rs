@@ -2,7 +2,7 @@
 
 use glam::DVec3;
 
-use crate::{ElemId, Mesh, VertId, key};
+use crate::{ElemId, Mesh, VertId};
 
 /// Relative sine below which three points count as collinear when merging
 /// zipper triangles into quads.
@@ -18,7 +18,7 @@ impl Mesh {
     }
 
     pub(crate) fn expand(&self, a: u32, b: u32, out: &mut Vec<VertId>) {
-        if let Some(&m) = self.mid.get(&key(a, b)) {
+        if let Some(m) = self.mid_of(a, b) {
             self.expand(a, m, out);
             out.push(VertId(m));
             self.expand(m, b, out);
@@ -63,9 +63,9 @@ impl Mesh {
         let mut general = false;
         for k in 0..n {
             let (a, b) = (v[k].0, v[(k + 1) % n].0);
-            if let Some(&m) = self.mid.get(&key(a, b)) {
+            if let Some(m) = self.mid_of(a, b) {
                 single[k] = Some(VertId(m));
-                if self.mid.contains_key(&key(a, m)) || self.mid.contains_key(&key(m, b)) {
+                if self.mid_of(a, m).is_some() || self.mid_of(m, b).is_some() {
                     general = true;
                 }
             }

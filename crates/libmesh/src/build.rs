@@ -392,7 +392,7 @@ impl Mesh {
             pos,
             vsurf,
             vparent,
-            mid: FxHashMap::default(),
+            mid: Default::default(),
             n_leaves: elems.len(),
             elems,
             patches,

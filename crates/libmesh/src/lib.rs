@@ -52,8 +52,9 @@
 //! level, and which patch edge each element edge lies on) with the four
 //! children of a split at consecutive ids, and no per-element heap
 //! allocation. Vertices are a position, a surface and two parent ids (36
-//! bytes). Edge midpoints are found through one hash map keyed by the edge's
-//! two vertex ids (smaller first), which is also how a leaf finds the hanging
+//! bytes). Edge midpoints are found through one hash table of vertex ids keyed
+//! by the edge's two vertex ids (smaller first; the key is not stored: it is
+//! the midpoint's parents), which is also how a leaf finds the hanging
 //! midpoints and stitched vertices on its edges. Patch roots are elements
 //! `0..num_patches`, so `ElemId(p)` is the root of `PatchId(p)`. Callers keep
 //! per-vertex data (irradiance, radiosity) in their own flat arrays indexed by
@@ -119,8 +120,8 @@
 //! # Memory
 //!
 //! An element is 32 bytes, a vertex 36 (position, surface, parents) plus,
-//! for an edge midpoint, one hash-map entry (12 bytes and a control byte,
-//! at most 7/8 full). Uniform refinement of quads makes 4/3 elements and
+//! for an edge midpoint, one hash-table entry (a 4-byte vertex id and a
+//! control byte, at most 7/8 full). Uniform refinement of quads makes 4/3 elements and
 //! about one vertex per leaf (two thirds of them edge midpoints): measured
 //! on a 100 × 100 patch grid refined three levels, 84 bytes of heap per
 //! element (112 per leaf), vector growth slack included.
@@ -145,18 +146,19 @@
 //! split order); no hash-map iteration reaches any output or id.
 
 use glam::DVec3;
-use rustc_hash::FxHashMap;
 
 mod anchor;
 mod build;
 mod output;
 mod refine;
 mod validate;
+mod write;
 
 #[cfg(test)]
 mod tests;
 
 pub use build::BuildError;
+pub use write::VertexColours;
 
 macro_rules! id_type {
     ($(#[$m:meta])* $name:ident) => {
@@ -261,7 +263,7 @@ pub struct Mesh {
     /// midpoints of two opposite edges).
     pub(crate) vparent: Vec<[u32; 2]>,
     /// Edge (smaller vertex id, larger) → the vertex at its midpoint.
-    pub(crate) mid: FxHashMap<(u32, u32), u32>,
+    pub(crate) mid: MidMap,
     pub(crate) elems: Vec<Elem>,
     pub(crate) n_leaves: usize,
     pub(crate) patches: Vec<Patch>,
@@ -348,7 +350,13 @@ impl Mesh {
 
     /// The vertex at the midpoint of the edge `a`–`b` (either order), if any.
     pub fn edge_midpoint(&self, a: VertId, b: VertId) -> Option<VertId> {
-        self.mid.get(&key(a.0, b.0)).map(|&m| VertId(m))
+        self.mid_of(a.0, b.0).map(VertId)
+    }
+
+    /// The midpoint vertex of the edge `a`–`b` (either order), if any.
+    #[inline]
+    pub(crate) fn mid_of(&self, a: u32, b: u32) -> Option<u32> {
+        self.mid.get(&self.vparent, key(a, b))
     }
 
     // ------------------------------------------------------------------
@@ -544,7 +552,7 @@ impl Mesh {
             + self.vparent.capacity() * 8
             + self.elems.capacity() * size_of::<Elem>()
             // hashbrown: one entry plus one control byte per bucket.
-            + self.mid.capacity() * 8 / 7 * (size_of::<((u32, u32), u32)>() + 1)
+            + self.mid.capacity() * 8 / 7 * (size_of::<u32>() + 1)
             + self.patches.capacity() * size_of::<Patch>()
             + self.twin_start.capacity() * 4
             + self.twin_verts.capacity() * 8
@@ -566,7 +574,7 @@ impl Mesh {
         (
             size_of::<Elem>(),
             size_of::<DVec3>() + 4 + 8,
-            size_of::<((u32, u32), u32)>() + 1,
+            size_of::<u32>() + 1,
         )
     }
 }
@@ -575,6 +583,58 @@ impl Mesh {
 #[inline]
 pub(crate) fn key(a: u32, b: u32) -> (u32, u32) {
     if a < b { (a, b) } else { (b, a) }
+}
+
+/// The edge-midpoint map: a hash table of midpoint vertex ids alone (4 bytes
+/// and a control byte per bucket instead of 12 and one), the key of an entry
+/// being its vertex's parents (the ends of the edge it was put on), read from
+/// `vparent` when needed.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct MidMap {
+    table: hashbrown::HashTable<u32>,
+}
+
+#[inline]
+fn hash_edge(k: (u32, u32)) -> u64 {
+    use std::hash::BuildHasher;
+    rustc_hash::FxBuildHasher.hash_one(k)
+}
+
+impl MidMap {
+    /// The vertex whose parents are the edge `k` (a [`key`]).
+    #[inline]
+    pub(crate) fn get(&self, vparent: &[[u32; 2]], k: (u32, u32)) -> Option<u32> {
+        self.table
+            .find(hash_edge(k), |&m| {
+                let [a, b] = vparent[m as usize];
+                key(a, b) == k
+            })
+            .copied()
+    }
+
+    /// Registers vertex `m` (already in `vparent`, not yet in the map) as the
+    /// midpoint of the edge between its parents.
+    pub(crate) fn insert(&mut self, vparent: &[[u32; 2]], m: u32) {
+        let [a, b] = vparent[m as usize];
+        let h = |&v: &u32| {
+            let [a, b] = vparent[v as usize];
+            hash_edge(key(a, b))
+        };
+        self.table.insert_unique(hash_edge(key(a, b)), m, h);
+    }
+
+    pub(crate) fn len(&self) -> usize {
+        self.table.len()
+    }
+
+    pub(crate) fn capacity(&self) -> usize {
+        self.table.capacity()
+    }
+
+    /// The midpoint vertices, in no particular order.
+    pub(crate) fn iter(&self) -> impl Iterator<Item = u32> + '_ {
+        self.table.iter().copied()
+    }
 }
 
 struct Leaves<'a> {

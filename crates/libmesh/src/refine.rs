@@ -2,7 +2,7 @@
 
 use glam::DVec3;
 
-use crate::{Elem, ElemId, INTERIOR, MAX_LEVEL, Mesh, NONE, NewVertex, Split, VertId, key};
+use crate::{Elem, ElemId, INTERIOR, MAX_LEVEL, Mesh, NONE, NewVertex, Split, VertId};
 
 /// Where edge `k` of child `c` lies.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -213,15 +213,12 @@ impl Mesh {
     fn midpoint(&mut self, el: &Elem, k: usize, out: &mut Split) -> VertId {
         let n = el.n();
         let (a, b) = (el.v[k], el.v[(k + 1) % n]);
-        let id = self.pos.len() as u32;
-        match self.mid.entry(key(a.0, b.0)) {
-            std::collections::hash_map::Entry::Occupied(o) => return VertId(*o.get()),
-            std::collections::hash_map::Entry::Vacant(v) => {
-                v.insert(id);
-            }
+        if let Some(m) = self.mid_of(a.0, b.0) {
+            return VertId(m);
         }
         let p = (self.pos[a.idx()] + self.pos[b.idx()]) * 0.5;
         let m = self.new_vertex(p, self.vsurf[a.idx()], [a.0, b.0], out);
+        self.mid.insert(&self.vparent, m.0);
         let j = el.pedge(k);
         if j != INTERIOR {
             let t = el.patch as usize * 4 + j as usize;
@@ -258,7 +255,7 @@ impl Mesh {
             if (x == ab[0] && y == ab[1]) || (x == ab[1] && y == ab[0]) {
                 return;
             }
-            let Some(&mo) = self.mid.get(&key(x.0, y.0)) else {
+            let Some(mo) = self.mid_of(x.0, y.0) else {
                 debug_assert!(false, "stitch: missing own midpoint above the target");
                 return;
             };
@@ -278,14 +275,12 @@ impl Mesh {
     /// The midpoint of `x`–`y` in the twin surface, made as a stitched vertex
     /// when missing.
     fn twin_midpoint(&mut self, x: VertId, y: VertId, out: &mut Split) -> VertId {
-        let id = self.pos.len() as u32;
-        match self.mid.entry(key(x.0, y.0)) {
-            std::collections::hash_map::Entry::Occupied(o) => return VertId(*o.get()),
-            std::collections::hash_map::Entry::Vacant(v) => {
-                v.insert(id);
-            }
+        if let Some(m) = self.mid_of(x.0, y.0) {
+            return VertId(m);
         }
         let p = (self.pos[x.idx()] + self.pos[y.idx()]) * 0.5;
-        self.new_vertex(p, self.vsurf[x.idx()], [x.0, y.0], out)
+        let m = self.new_vertex(p, self.vsurf[x.idx()], [x.0, y.0], out);
+        self.mid.insert(&self.vparent, m.0);
+        m
     }
 }

@@ -693,3 +693,44 @@ fn split_reports_all_new_vertices_in_id_order() {
     }
     m.validate().unwrap();
 }
+
+/// `write_ug` streams exactly the bytes of writing `to_model`, including
+/// derived names that must skip input names (vertex `a.2`, face `floor.1`)
+/// and patches that share a name.
+#[test]
+fn streamed_output_is_the_written_model() {
+    let src = "{a comment} c_rgb grey 0.5 0.5 0.5; c_rgb dot 0.1 0.2 0.3;
+        defmat lamp; diffuse_rgb 0 0 0; emission_rgb 1 1 1; end;
+        v a 0 0 0; v b 1 0 0 dot; v c 1 1 0; v d 0 1 0; v e 0 0 1; v f 1 0 1;
+        v a.2 2 0 0; v g 2 1 0; v h 2 0 1;
+        f floor (a b c d) grey;
+        f wall (a e f b) grey;
+        f floor.1 (b a.2 g c) grey;
+        f (b h a.2) lamp;
+        w floor.3 (e f);";
+    let (src, mut m) = mesh(src);
+    let check = |m: &Mesh| {
+        let mut out = Vec::new();
+        m.write_ug(&src, &mut out).unwrap();
+        assert_eq!(
+            String::from_utf8(out).unwrap(),
+            ug::write_string(&m.to_model(&src))
+        );
+    };
+    check(&m);
+    for round in 0..3 {
+        let leaves: Vec<ElemId> = m.leaves().collect();
+        for (i, e) in leaves.into_iter().enumerate() {
+            if (i + round) % 2 == 0 {
+                m.split(e);
+            }
+        }
+        check(&m);
+    }
+    let text = ug::write_string(&m.to_model(&src));
+    assert!(
+        text.contains("v a.3 "),
+        "a derived name skips the input's a.2"
+    );
+    assert!(text.contains("f floor.2 ") && !text.contains("f floor.1 ("));
+}

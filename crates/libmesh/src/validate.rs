@@ -69,9 +69,18 @@ impl Mesh {
                 return Err(format!("vertex {v} is not halfway between its parents"));
             }
         }
-        for (&(a, b), &m) in &self.mid {
+        for m in self.mid.iter() {
             // Order-independent: any failure is reported, and all must pass.
-            if a >= b || m as usize >= nv || self.vsurf[a as usize] != self.vsurf[m as usize] {
+            if m as usize >= nv {
+                return Err("a midpoint-map entry is inconsistent".into());
+            }
+            let [a, b] = self.vparent[m as usize];
+            let (a, b) = key(a, b);
+            if a >= b
+                || b == NONE
+                || self.vsurf[a as usize] != self.vsurf[m as usize]
+                || self.mid_of(a, b) != Some(m)
+            {
                 return Err("a midpoint-map entry is inconsistent".into());
             }
         }
@@ -96,7 +105,7 @@ impl Mesh {
                 continue;
             }
             let m: Vec<Option<u32>> = (0..n)
-                .map(|k| self.mid.get(&key(el.v[k].0, el.v[(k + 1) % n].0)).copied())
+                .map(|k| self.mid_of(el.v[k].0, el.v[(k + 1) % n].0))
                 .collect();
             if m.iter().any(|x| x.is_none()) {
                 return Err(format!("element {i}: split without edge midpoints"));

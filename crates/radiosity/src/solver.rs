@@ -25,6 +25,18 @@ fn sum(a: Rgb) -> f64 {
     a[0] + a[1] + a[2]
 }
 
+/// Leaves handled per parallel batch when scanning all leaves.
+const CHUNK: usize = 1 << 16;
+/// Targets handled per visibility query.
+const CHUNK_TARGETS: usize = 1 << 20;
+
+/// The vertices a shot goes to.
+#[derive(Clone, Copy)]
+enum Targets<'a> {
+    All,
+    List(&'a [VertId]),
+}
+
 /// What the output colours are.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Output {
@@ -121,8 +133,12 @@ pub struct Solver<'v> {
     emit: Vec<Rgb>,
     /// Irradiance per vertex.
     h: Vec<Rgb>,
-    /// This shot's contribution per vertex.
-    dh: Vec<Rgb>,
+    /// This shot's form factor sum per vertex: the shot added ΔH = `d_b` × gain
+    /// (every vertex is shot at most once per shot, so this is exactly the ΔH
+    /// added; 0 where nothing arrived). 8 bytes per vertex instead of 24.
+    gain: Vec<f64>,
+    /// The current shot's unshot radiosity ΔB.
+    d_b: Rgb,
     /// Energy already shot per patch.
     shot: Vec<Rgb>,
     emitted: f64,
@@ -190,7 +206,8 @@ impl<'v> Solver<'v> {
             rho,
             emit,
             h: vec![[0.0; 3]; nv],
-            dh: vec![[0.0; 3]; nv],
+            gain: vec![0.0; nv],
+            d_b: [0.0; 3],
             shot: vec![[0.0; 3]; np],
             emitted,
             vis,
@@ -324,6 +341,7 @@ impl<'v> Solver<'v> {
     /// Shoots one patch's unshot energy; `None` when it has none.
     pub fn shoot(&mut self, p: PatchId) -> Option<ShotStats> {
         let t0 = Instant::now();
+        self.grow();
         let d_phi = self.unshot(p);
         let energy = sum(d_phi);
         if energy <= 0.0 {
@@ -372,34 +390,48 @@ impl<'v> Solver<'v> {
             .collect();
         let surface = self.mesh.patch_surface(p);
         let normal = self.mesh.surface_normal(surface);
-        let all: Vec<VertId> = (0..self.mesh.num_vertices())
-            .map(|v| VertId(v as u32))
-            .collect();
-        self.dh.iter_mut().for_each(|d| *d = [0.0; 3]);
-        let reached = self.shoot_at(&all, &shooters, surface, normal, d_b);
+        self.gain.iter_mut().for_each(|g| *g = 0.0);
+        self.d_b = d_b;
+        let reached = self.shoot_at(Targets::All, &shooters, surface, normal);
         self.shot[p.idx()] = add(self.shot[p.idx()], d_phi);
 
         // §6: gradient subdivision, re-shooting this light at the new vertices.
         let mut subdivided = 0;
+        let mut chunk: Vec<ElemId> = Vec::with_capacity(CHUNK);
         for _round in 0..32 {
             let grad = self.gradient;
             let min_edge = self.min_edge;
-            let candidates: Vec<ElemId> = self.mesh.leaves().collect();
-            let to_split: Vec<ElemId> = candidates
-                .into_par_iter()
-                .filter(|&e| {
-                    let c = self.mesh.elem_corners(e);
-                    if !c.iter().any(|v| sum(self.dh[v.idx()]) > 0.0)
-                        || self.mesh.elem_longest_edge(e) <= min_edge
-                    {
-                        return false;
-                    }
-                    (0..c.len()).any(|i| {
-                        let (a, b) = (self.radiosity(c[i]), self.radiosity(c[(i + 1) % c.len()]));
-                        (0..3).any(|k| (a[k] - b[k]).abs() > grad)
+            // Leaves in order, a chunk at a time (a list of all leaves would
+            // cost 4 bytes per leaf).
+            let mut to_split: Vec<ElemId> = Vec::new();
+            let mut leaves = self.mesh.leaves();
+            loop {
+                chunk.clear();
+                chunk.extend(leaves.by_ref().take(CHUNK));
+                if chunk.is_empty() {
+                    break;
+                }
+                let this = &*self;
+                let part: Vec<ElemId> = chunk
+                    .par_iter()
+                    .copied()
+                    .filter(|&e| {
+                        let c = this.mesh.elem_corners(e);
+                        if !c.iter().any(|&v| sum(this.dh(v)) > 0.0)
+                            || this.mesh.elem_longest_edge(e) <= min_edge
+                        {
+                            return false;
+                        }
+                        (0..c.len()).any(|i| {
+                            let (a, b) =
+                                (this.radiosity(c[i]), this.radiosity(c[(i + 1) % c.len()]));
+                            (0..3).any(|k| (a[k] - b[k]).abs() > grad)
+                        })
                     })
-                })
-                .collect();
+                    .collect();
+                to_split.extend(part);
+            }
+            drop(leaves);
             if to_split.is_empty() {
                 break;
             }
@@ -414,19 +446,19 @@ impl<'v> Solver<'v> {
                 for nv in &split.new_vertices {
                     // Value before this shot: the mean of the parents' values before it.
                     let before = |s: &Self, v: VertId| {
-                        let (h, d) = (s.h[v.idx()], s.dh[v.idx()]);
+                        let (h, d) = (s.h[v.idx()], s.dh(v));
                         [h[0] - d[0], h[1] - d[1], h[2] - d[2]]
                     };
                     let (a, b) = (before(self, nv.parents[0]), before(self, nv.parents[1]));
                     self.h[nv.v.idx()] = scale(add(a, b), 0.5);
-                    self.dh[nv.v.idx()] = [0.0; 3];
+                    self.gain[nv.v.idx()] = 0.0;
                     fresh.push(nv.v);
                 }
             }
             if fresh.is_empty() {
                 break;
             }
-            self.shoot_at(&fresh, &shooters, surface, normal, d_b);
+            self.shoot_at(Targets::List(&fresh), &shooters, surface, normal);
         }
 
         let (received, reflected) = self.received();
@@ -447,122 +479,203 @@ impl<'v> Solver<'v> {
         Some(stats)
     }
 
+    /// Frees the working arrays of a shot (8 bytes per vertex) until the
+    /// next shot: call before writing a large solution.
+    pub fn release_scratch(&mut self) {
+        self.gain = Vec::new();
+    }
+
+    /// What the current shot added to a vertex's irradiance.
+    #[inline]
+    fn dh(&self, v: VertId) -> Rgb {
+        scale(self.d_b, self.gain[v.idx()])
+    }
+
     /// Makes the per-vertex arrays as long as the mesh's vertex list.
     fn grow(&mut self) {
         let n = self.mesh.num_vertices();
         self.h.resize(n, [0.0; 3]);
-        self.dh.resize(n, [0.0; 3]);
+        self.gain.resize(n, 0.0);
     }
 
     /// Energy received by the elements from the current shot (Σ area × mean
     /// corner ΔH) and the part of it they reflect.
     fn received(&self) -> (f64, f64) {
-        let leaves: Vec<ElemId> = self.mesh.leaves().collect();
-        let parts: Vec<(f64, f64)> = leaves
-            .par_iter()
-            .map(|&e| {
-                let c = self.mesh.elem_corners(e);
-                let mut d = [0.0; 3];
-                for v in c {
-                    d = add(d, self.dh[v.idx()]);
-                }
-                let w = self.mesh.elem_area(e) / c.len() as f64;
-                let r = self.rho[self.mesh.elem_surface(e).idx()];
-                (sum(d) * w, (d[0] * r[0] + d[1] * r[1] + d[2] * r[2]) * w)
-            })
-            .collect();
-        parts
-            .iter()
-            .fold((0.0, 0.0), |(a, b), (x, y)| (a + x, b + y))
+        let mut acc = (0.0, 0.0);
+        let mut chunk: Vec<ElemId> = Vec::with_capacity(CHUNK);
+        let mut leaves = self.mesh.leaves();
+        loop {
+            chunk.clear();
+            chunk.extend(leaves.by_ref().take(CHUNK));
+            if chunk.is_empty() {
+                break;
+            }
+            let parts: Vec<(f64, f64)> = chunk
+                .par_iter()
+                .map(|&e| {
+                    let c = self.mesh.elem_corners(e);
+                    let mut d = [0.0; 3];
+                    for &v in c {
+                        d = add(d, self.dh(v));
+                    }
+                    let w = self.mesh.elem_area(e) / c.len() as f64;
+                    let r = self.rho[self.mesh.elem_surface(e).idx()];
+                    (sum(d) * w, (d[0] * r[0] + d[1] * r[1] + d[2] * r[2]) * w)
+                })
+                .collect();
+            // Summed in leaf order: the same bits at any thread count.
+            acc = parts.iter().fold(acc, |(a, b), (x, y)| (a + x, b + y));
+        }
+        acc
     }
 
     /// Adds ΔB·F to the irradiance of the given vertices that see the shooter
-    /// elements; returns how many vertices received something.
+    /// elements (ΔB the current shot's `d_b`; F summed over the shooters into
+    /// `gain`, which must be 0 for the targets); returns how many vertices
+    /// received something.
     fn shoot_at(
         &mut self,
-        targets: &[VertId],
+        targets: Targets,
         shooters: &[(Vec<DVec3>, DVec3)],
         surface: SurfaceId,
         normal: DVec3,
-        d_b: Rgb,
     ) -> usize {
         let mesh = &self.mesh;
-        let nudge = self.inward(targets);
+        let nv = mesh.num_vertices();
+        let target = |i: usize| match targets {
+            Targets::All => VertId(i as u32),
+            Targets::List(l) => l[i],
+        };
+        let n_targets = match targets {
+            Targets::All => nv,
+            Targets::List(l) => l.len(),
+        };
+        let deltas: Vec<f64> = shooters
+            .iter()
+            .map(|(poly, _)| {
+                let size = (0..poly.len())
+                    .map(|i| (poly[(i + 1) % poly.len()] - poly[i]).length())
+                    .fold(0.0, f64::max);
+                self.opts.offset * size
+            })
+            .collect();
         // Candidates: in front of the shooter's plane and facing it.
-        let mut gains = vec![0.0f64; targets.len()];
-        for (poly, c) in shooters {
-            let size = (0..poly.len())
-                .map(|i| (poly[(i + 1) % poly.len()] - poly[i]).length())
-                .fold(0.0, f64::max);
-            let delta = self.opts.offset * size;
-            let cand: Vec<usize> = (0..targets.len())
-                .filter(|&k| {
-                    let v = targets[k];
-                    if mesh.vertex_surface(v) == surface {
-                        return false;
-                    }
-                    let x = mesh.vertex_pos(v);
-                    normal.dot(x - *c) > -delta && mesh.vertex_normal(v).dot(*c - x) > 0.0
-                })
-                .collect();
-            let verts: Vec<VertId> = cand.iter().map(|&k| targets[k]).collect();
-            let seen = self.vis.visible(mesh, *c, surface, &verts);
-            let ff: Vec<(usize, f64)> = cand
-                .par_iter()
-                .zip(&seen)
-                .filter(|(_, s)| **s)
-                .map(|(&k, _)| {
-                    let v = targets[k];
-                    let mut x = mesh.vertex_pos(v);
-                    // §5.4: a receiver on (or just behind) the shooter's plane is
-                    // moved a little in front of it — and first a little into its
-                    // own surface, so that at a corner where several shooters
-                    // meet it takes the limit from inside the receiving surface
-                    // (moving it off one plane only would leave it on the other).
-                    // The same nudged point serves every shooter, so the pieces
-                    // of the hemisphere that neighbouring shooters share add up.
-                    if normal.dot(x - *c) < delta {
-                        x += nudge[k] * delta;
-                        let d = normal.dot(x - *c);
-                        if d < 0.01 * delta {
-                            x += normal * (0.01 * delta - d);
+        let candidate = |v: VertId, c: DVec3, delta: f64| {
+            if mesh.vertex_surface(v) == surface {
+                return false;
+            }
+            let x = mesh.vertex_pos(v);
+            normal.dot(x - c) > -delta && mesh.vertex_normal(v).dot(c - x) > 0.0
+        };
+        // §5.4 needs each receiver's direction into its own surface only for
+        // candidates on (or just behind) a shooter's plane: find those first.
+        let mut near_plane: Vec<VertId> = Vec::new();
+        for ((_, c), &delta) in shooters.iter().zip(&deltas) {
+            for i in 0..n_targets {
+                let v = target(i);
+                if candidate(v, *c, delta) && normal.dot(mesh.vertex_pos(v) - *c) < delta {
+                    near_plane.push(v);
+                }
+            }
+        }
+        near_plane.sort_unstable();
+        near_plane.dedup();
+        let nudges = self.inward(&near_plane);
+        let nudge = |v: VertId| {
+            let k = near_plane
+                .binary_search(&v)
+                .expect("a receiver near the shooter's plane has its nudge");
+            nudges[k]
+        };
+        let gain = &mut self.gain;
+        for ((poly, c), &delta) in shooters.iter().zip(&deltas) {
+            let mut start = 0;
+            while start < n_targets {
+                // At most CHUNK targets at a time: the candidate lists cost 13
+                // bytes per candidate.
+                let end = (start + CHUNK_TARGETS).min(n_targets);
+                let cand: Vec<VertId> = (start..end)
+                    .map(target)
+                    .filter(|&v| candidate(v, *c, delta))
+                    .collect();
+                start = end;
+                let seen = self.vis.visible(mesh, *c, surface, &cand);
+                let ff: Vec<f64> = cand
+                    .par_iter()
+                    .zip(&seen)
+                    .map(|(&v, &s)| {
+                        if !s {
+                            return 0.0;
                         }
+                        let mut x = mesh.vertex_pos(v);
+                        // §5.4: a receiver on (or just behind) the shooter's plane is
+                        // moved a little in front of it — and first a little into its
+                        // own surface, so that at a corner where several shooters
+                        // meet it takes the limit from inside the receiving surface
+                        // (moving it off one plane only would leave it on the other).
+                        // The same nudged point serves every shooter, so the pieces
+                        // of the hemisphere that neighbouring shooters share add up.
+                        if normal.dot(x - *c) < delta {
+                            x += nudge(v) * delta;
+                            let d = normal.dot(x - *c);
+                            if d < 0.01 * delta {
+                                x += normal * (0.01 * delta - d);
+                            }
+                        }
+                        point_to_polygon(x, mesh.vertex_normal(v), poly)
+                    })
+                    .collect();
+                for ((&v, &s), f) in cand.iter().zip(&seen).zip(ff) {
+                    if s {
+                        gain[v.idx()] += f;
                     }
-                    (k, point_to_polygon(x, mesh.vertex_normal(v), poly))
-                })
-                .collect();
-            for (k, f) in ff {
-                gains[k] += f;
+                }
             }
         }
         let mut reached = 0;
-        for (k, &g) in gains.iter().enumerate() {
+        let d_b = self.d_b;
+        for i in 0..n_targets {
+            let v = target(i).idx();
+            let g = self.gain[v];
             if g > 0.0 {
                 reached += 1;
-                let v = targets[k].idx();
-                let add_h = scale(d_b, g);
-                self.h[v] = add(self.h[v], add_h);
-                self.dh[v] = add(self.dh[v], add_h);
+                self.h[v] = add(self.h[v], scale(d_b, g));
+            } else {
+                self.gain[v] = 0.0;
             }
         }
         reached
     }
 
-    /// For each target vertex, the unit direction into its own surface: the
-    /// mean of the directions toward the centroids of the leaf elements it is
-    /// a corner of.
-    fn inward(&self, targets: &[VertId]) -> Vec<DVec3> {
-        let mut acc = vec![DVec3::ZERO; self.mesh.num_vertices()];
+    /// For each of the given vertices (sorted, distinct), the unit direction
+    /// into its own surface: the mean of the directions toward the centroids
+    /// of the leaf elements it is a corner of.
+    fn inward(&self, verts: &[VertId]) -> Vec<DVec3> {
+        let mut acc = vec![DVec3::ZERO; verts.len()];
+        if verts.is_empty() {
+            return acc;
+        }
+        // A bitmap first: most corners are not wanted.
+        let mut wanted = vec![0u64; self.mesh.num_vertices().div_ceil(64)];
+        for v in verts {
+            wanted[v.idx() / 64] |= 1 << (v.idx() % 64);
+        }
         for e in self.mesh.leaves() {
+            let corners = self.mesh.elem_corners(e);
+            if !corners
+                .iter()
+                .any(|v| wanted[v.idx() / 64] & (1 << (v.idx() % 64)) != 0)
+            {
+                continue;
+            }
             let c = self.mesh.elem_centroid(e);
-            for &v in self.mesh.elem_corners(e) {
-                acc[v.idx()] += (c - self.mesh.vertex_pos(v)).normalize_or_zero();
+            for &v in corners {
+                if let Ok(k) = verts.binary_search(&v) {
+                    acc[k] += (c - self.mesh.vertex_pos(v)).normalize_or_zero();
+                }
             }
         }
-        targets
-            .iter()
-            .map(|v| acc[v.idx()].normalize_or_zero())
-            .collect()
+        acc.iter().map(|a| a.normalize_or_zero()).collect()
     }
 
     /// The display ambient term (Cohen et al. 1988): unshot energy spread over
@@ -645,5 +758,162 @@ impl<'v> Solver<'v> {
             .unwrap_or(out.items.len());
         out.items.splice(at..at, new_items);
         out
+    }
+}
+
+/// The output colours of a solution: one material per distinct value, in
+/// order of first appearance, found again per vertex through a table of
+/// colour indices (no per-vertex storage).
+struct Colours<'s, 'v> {
+    solver: &'s Solver<'v>,
+    src: &'s Model,
+    amb: Rgb,
+    /// Per colour: its first vertex and the `N` of its name `_radN`.
+    colours: Vec<(u32, u32)>,
+    /// Colour indices, hashed by value.
+    table: hashbrown::HashTable<u32>,
+    ryu: ryu::Buffer,
+}
+
+fn colour_key(val: Rgb) -> [u64; 3] {
+    val.map(|x| (x + 0.0).to_bits())
+}
+
+fn hash_key(k: &[u64; 3]) -> u64 {
+    use std::hash::BuildHasher;
+    rustc_hash::FxBuildHasher.hash_one(k)
+}
+
+impl<'s, 'v> Colours<'s, 'v> {
+    fn new(solver: &'s Solver<'v>, src: &'s Model) -> Self {
+        let amb = if solver.opts.ambient {
+            solver.ambient()
+        } else {
+            [0.0; 3]
+        };
+        Colours {
+            solver,
+            src,
+            amb,
+            colours: Vec::new(),
+            table: hashbrown::HashTable::new(),
+            ryu: ryu::Buffer::new(),
+        }
+    }
+
+    /// Finds the distinct colours, in vertex order.
+    fn build(&mut self) {
+        let (solver, amb) = (self.solver, self.amb);
+        let taken: rustc_hash::FxHashSet<&str> =
+            self.src.materials.iter().map(|m| m.name.as_str()).collect();
+        let mut counter = 0u32;
+        let mut name = String::new();
+        for v in 0..solver.mesh.num_vertices() {
+            let key = colour_key(value_of(solver, amb, VertId(v as u32)));
+            let h = hash_key(&key);
+            let colours = &self.colours;
+            let found = self
+                .table
+                .find(h, |&i| {
+                    colour_key(value_of(solver, amb, VertId(colours[i as usize].0))) == key
+                })
+                .is_some();
+            if found {
+                continue;
+            }
+            let n = loop {
+                use std::fmt::Write as _;
+                name.clear();
+                let _ = write!(name, "_rad{counter}");
+                counter += 1;
+                if !taken.contains(name.as_str()) {
+                    break counter - 1;
+                }
+            };
+            let i = self.colours.len() as u32;
+            self.colours.push((v as u32, n));
+            let colours = &self.colours;
+            self.table.insert_unique(h, i, |&j| {
+                hash_key(&colour_key(value_of(
+                    solver,
+                    amb,
+                    VertId(colours[j as usize].0),
+                )))
+            });
+        }
+    }
+
+    fn value(&self, v: VertId) -> Rgb {
+        value_of(self.solver, self.amb, v)
+    }
+
+    fn index(&self, v: VertId) -> usize {
+        let key = colour_key(self.value(v));
+        *self
+            .table
+            .find(hash_key(&key), |&i| {
+                colour_key(self.value(VertId(self.colours[i as usize].0))) == key
+            })
+            .expect("every vertex's colour is in the table") as usize
+    }
+}
+
+/// The colour written on a vertex (as [`Solver::to_model`] computes it).
+fn value_of(s: &Solver, amb: Rgb, v: VertId) -> Rgb {
+    match s.opts.output {
+        Output::Radiosity => {
+            let b = s.radiosity(v);
+            let r = s.rho[s.mesh.vertex_surface(v).idx()];
+            [
+                b[0] + r[0] * amb[0],
+                b[1] + r[1] * amb[1],
+                b[2] + r[2] * amb[2],
+            ]
+        }
+        Output::Irradiance => add(s.h[v.idx()], amb),
+    }
+}
+
+fn push_rad_name(line: &mut Vec<u8>, n: u32) {
+    use std::io::Write as _;
+    let _ = write!(line, "_rad{n}");
+}
+
+impl libmesh::VertexColours for Colours<'_, '_> {
+    fn write_before_vertices(&mut self, out: &mut dyn std::io::Write) -> std::io::Result<()> {
+        self.build();
+        let mut line = Vec::with_capacity(128);
+        for k in 0..self.colours.len() {
+            let (v, n) = self.colours[k];
+            let val = self.value(VertId(v));
+            line.clear();
+            line.extend_from_slice(b"c_rgb ");
+            push_rad_name(&mut line, n);
+            for x in val {
+                line.push(b' ');
+                ug::push_f64(&mut line, x, &mut self.ryu);
+            }
+            line.extend_from_slice(b";\n");
+            out.write_all(&line)?;
+        }
+        Ok(())
+    }
+
+    fn colour_name(&mut self, v: VertId, line: &mut Vec<u8>) -> bool {
+        let n = self.colours[self.index(v)].1;
+        push_rad_name(line, n);
+        true
+    }
+}
+
+impl Solver<'_> {
+    /// Writes the current solution as UG text: exactly the bytes of
+    /// `ug::write(&self.to_model(src))`, streamed without building the model.
+    ///
+    /// Of `src` only what [`Mesh::write_ug`](libmesh::Mesh::write_ug) reads
+    /// is needed: its geometry may have been dropped.
+    pub fn write_ug(&self, src: &Model, out: &mut dyn std::io::Write) -> std::io::Result<()> {
+        let mut colours = Colours::new(self, src);
+        self.mesh.write_ug_with(src, &mut colours, out)
     }
 }

@@ -1,7 +1,7 @@
 //! Which vertices a shooter sees: the [`Visibility`] trait and its CPU
 //! ray-cast implementation (the reference, and the fallback without a GPU).
 
-use geom::bvh::{Bvh, Triangle};
+use geom::bvh::{Triangle, ray_triangle};
 use glam::DVec3;
 use libmesh::{Mesh, SurfaceId, VertId};
 use rayon::prelude::*;
@@ -27,38 +27,210 @@ pub trait Visibility: Sync {
 /// point to a vertex ignores the shooter's and the receiver's own surfaces
 /// (a planar surface cannot hide a point of its own plane) and stops short of
 /// the vertex by a relative 1e-7, so grazing contacts at shared corners do not count.
+///
+/// The BVH is compact (about 44 bytes a triangle and the corner positions,
+/// instead of 108 bytes a triangle for `geom::bvh`): triangles are three
+/// indices into a shared corner array and a surface id. Node boxes and the
+/// box test are `geom::bvh`'s, and the triangle test is
+/// `geom::bvh::ray_triangle` in f64 on the same corners in the same order;
+/// "is anything hit" does not depend on the order in which triangles are
+/// tried, so the answers are `geom::bvh`'s.
+///
+/// (Node boxes stay f64: boxes rounded outward to f32 changed answers,
+/// because the box test — `geom::bvh`'s too — rejects a ray that lies
+/// exactly in the plane of a box's lower face with a zero direction
+/// component there (`0 · ∞` is NaN, and `min(NaN, ∞)` is ∞), and a box
+/// rounded outward no longer has its face in that plane.)
 pub struct RayVisibility {
-    bvh: Bvh,
+    /// Patch corner positions (indexed by corner vertex id).
+    pts: Vec<DVec3>,
+    tris: Vec<Tri>,
+    nodes: Vec<Node>,
 }
+
+#[derive(Clone, Copy, Debug)]
+struct Tri {
+    v: [u32; 3],
+    surface: u32,
+}
+
+/// A box, and either the first of `count` triangles (a leaf) or the left
+/// child (`count == 0`; right = left + 1).
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    lo: DVec3,
+    hi: DVec3,
+    first: u32,
+    count: u32,
+}
+
+/// At most this many triangles in a leaf.
+const LEAF: usize = 4;
 
 impl RayVisibility {
     pub fn new(mesh: &Mesh) -> RayVisibility {
-        let mut tris = Vec::new();
+        // Patch corners are the mesh's first vertices; keep their positions.
+        let n_pts = mesh
+            .patches()
+            .flat_map(|p| mesh.patch_corners(p).iter().map(|v| v.idx() + 1))
+            .max()
+            .unwrap_or(0);
+        let pts: Vec<DVec3> = (0..n_pts)
+            .map(|v| mesh.vertex_pos(VertId(v as u32)))
+            .collect();
+        let n_tris: usize = mesh
+            .patches()
+            .map(|p| mesh.patch_corners(p).len() - 2)
+            .sum();
+        let mut tris = Vec::with_capacity(n_tris);
         for p in mesh.patches() {
             let s = mesh.patch_surface(p).0;
-            let c: Vec<DVec3> = mesh
-                .patch_corners(p)
-                .iter()
-                .map(|&v| mesh.vertex_pos(v))
-                .collect();
+            let c = mesh.patch_corners(p);
             for k in 1..c.len() - 1 {
-                tris.push(Triangle {
-                    p: [c[0], c[k], c[k + 1]],
-                    id: s,
+                tris.push(Tri {
+                    v: [c[0].0, c[k].0, c[k + 1].0],
+                    surface: s,
                 });
             }
         }
-        RayVisibility {
-            bvh: Bvh::new(tris),
-        }
+        let nodes = build(&pts, &mut tris);
+        RayVisibility { pts, tris, nodes }
     }
 
     /// Whether the segment from → to is clear of every surface but the two named.
     pub fn clear(&self, from: DVec3, to: DVec3, a: SurfaceId, b: SurfaceId) -> bool {
-        !self.bvh.occluded(from, to - from, 1e-7, 1.0 - 1e-7, |id| {
+        !self.occluded(from, to - from, 1e-7, 1.0 - 1e-7, |id| {
             id != a.0 && id != b.0
         })
     }
+
+    /// Approximate heap memory held, in bytes.
+    pub fn heap_bytes(&self) -> usize {
+        use std::mem::size_of;
+        self.pts.capacity() * size_of::<DVec3>()
+            + self.tris.capacity() * size_of::<Tri>()
+            + self.nodes.capacity() * size_of::<Node>()
+    }
+
+    fn triangle(&self, t: &Tri) -> Triangle {
+        Triangle {
+            p: t.v.map(|v| self.pts[v as usize]),
+            id: t.surface,
+        }
+    }
+
+    /// Whether a triangle whose surface passes `keep` is hit with `tmin < t < tmax`.
+    fn occluded(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        tmin: f64,
+        tmax: f64,
+        keep: impl Fn(u32) -> bool,
+    ) -> bool {
+        if self.nodes.is_empty() {
+            return false;
+        }
+        let inv = DVec3::ONE / dir;
+        let mut stack = [0u32; 64];
+        let mut sp = 1usize;
+        while sp > 0 {
+            sp -= 1;
+            let n = &self.nodes[stack[sp] as usize];
+            if !slab(n.lo, n.hi, origin, inv, tmin, tmax) {
+                continue;
+            }
+            if n.count > 0 {
+                for t in &self.tris[n.first as usize..(n.first + n.count) as usize] {
+                    if !keep(t.surface) {
+                        continue;
+                    }
+                    if let Some(tt) = ray_triangle(origin, dir, &self.triangle(t))
+                        && tt > tmin
+                        && tt < tmax
+                    {
+                        return true;
+                    }
+                }
+            } else {
+                assert!(sp + 2 <= stack.len(), "BVH deeper than its traversal stack");
+                stack[sp] = n.first;
+                stack[sp + 1] = n.first + 1;
+                sp += 2;
+            }
+        }
+        false
+    }
+}
+
+fn centroid(pts: &[DVec3], t: &Tri) -> DVec3 {
+    (pts[t.v[0] as usize] + pts[t.v[1] as usize] + pts[t.v[2] as usize]) / 3.0
+}
+
+/// Top-down median split along the longest axis of the centroid bounds.
+fn build(pts: &[DVec3], tris: &mut [Tri]) -> Vec<Node> {
+    let mut nodes = Vec::with_capacity(2 * tris.len() / LEAF + 1);
+    if tris.is_empty() {
+        return nodes;
+    }
+    let empty = Node {
+        lo: DVec3::ZERO,
+        hi: DVec3::ZERO,
+        first: 0,
+        count: 0,
+    };
+    nodes.push(empty);
+    let mut stack = vec![(0usize, 0usize, tris.len())];
+    while let Some((ni, s, e)) = stack.pop() {
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        let (mut clo, mut chi) = (lo, hi);
+        for t in &tris[s..e] {
+            for v in t.v {
+                lo = lo.min(pts[v as usize]);
+                hi = hi.max(pts[v as usize]);
+            }
+            let c = centroid(pts, t);
+            clo = clo.min(c);
+            chi = chi.max(c);
+        }
+        nodes[ni].lo = lo;
+        nodes[ni].hi = hi;
+        let ext = chi - clo;
+        if e - s <= LEAF || ext.max_element() <= 0.0 {
+            nodes[ni].first = s as u32;
+            nodes[ni].count = (e - s) as u32;
+            continue;
+        }
+        let axis = if ext.x >= ext.y && ext.x >= ext.z {
+            0
+        } else if ext.y >= ext.z {
+            1
+        } else {
+            2
+        };
+        let mid = (s + e) / 2;
+        tris[s..e].select_nth_unstable_by(mid - s, |a, b| {
+            centroid(pts, a)[axis].total_cmp(&centroid(pts, b)[axis])
+        });
+        let left = nodes.len();
+        nodes.push(empty);
+        nodes.push(empty);
+        nodes[ni].first = left as u32;
+        nodes[ni].count = 0;
+        stack.push((left, s, mid));
+        stack.push((left + 1, mid, e));
+    }
+    nodes
+}
+
+#[inline]
+fn slab(lo: DVec3, hi: DVec3, o: DVec3, inv: DVec3, tmin: f64, tmax: f64) -> bool {
+    let t0 = (lo - o) * inv;
+    let t1 = (hi - o) * inv;
+    // NaN (0 · inf) comparisons fall out as "no constraint" through min/max.
+    let tn = t0.min(t1).max_element().max(tmin);
+    let tf = t0.max(t1).min_element().min(tmax);
+    tn <= tf
 }
 
 impl Visibility for RayVisibility {
@@ -77,5 +249,55 @@ impl Visibility for RayVisibility {
 
     fn name(&self) -> &'static str {
         "ray"
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The compact BVH answers exactly as `geom::bvh` over the same triangles.
+    #[test]
+    fn same_answers_as_geom_bvh() {
+        let src = "c_rgb g 0.5 0.5 0.5;
+            v a 0 0 0; v b 1 0 0; v c 1 1 0; v d 0 1 0;
+            v e 0.2 0.2 0.5; v f 0.8 0.2 0.5; v g 0.8 0.8 0.5; v h 0.2 0.8 0.5;
+            v i 0 0 1; v j 1 0 1; v k 1 1 1; v l 0 1 1;
+            v m 0.3 0.1 0.7; v n 0.9 0.6 0.7; v o 0.1 0.9 0.7;
+            f floor (a b c d) g; f mid (e f g h) g; f top (l k j i) g; f tri (m n o) g;";
+        let model = ug::parse(src.as_bytes(), "t").unwrap().model;
+        let mesh = Mesh::from_model(&model, 1e-9).unwrap();
+        let vis = RayVisibility::new(&mesh);
+        let mut tris = Vec::new();
+        for p in mesh.patches() {
+            let c: Vec<DVec3> = mesh
+                .patch_corners(p)
+                .iter()
+                .map(|&v| mesh.vertex_pos(v))
+                .collect();
+            for k in 1..c.len() - 1 {
+                tris.push(Triangle {
+                    p: [c[0], c[k], c[k + 1]],
+                    id: mesh.patch_surface(p).0,
+                });
+            }
+        }
+        let reference = geom::bvh::Bvh::new(tris);
+        let mut n = 0;
+        for i in 0..11 {
+            for j in 0..11 {
+                for (z0, z1) in [(0.0, 1.0), (0.0, 0.6), (0.25, 0.9), (1.0, 0.0)] {
+                    let from = DVec3::new(i as f64 / 10.0, j as f64 / 10.0, z0);
+                    let to = DVec3::new(1.0 - j as f64 / 10.0, i as f64 / 10.0, z1);
+                    let (a, b) = (SurfaceId(0), SurfaceId(2));
+                    let want = !reference.occluded(from, to - from, 1e-7, 1.0 - 1e-7, |id| {
+                        id != a.0 && id != b.0
+                    });
+                    assert_eq!(vis.clear(from, to, a, b), want, "{from} → {to}");
+                    n += usize::from(want);
+                }
+            }
+        }
+        assert!(n > 0 && n < 11 * 11 * 4);
     }
 }

@@ -188,6 +188,49 @@ fn the_same_bits_at_any_thread_count() {
     assert_eq!(run(1), run(3));
 }
 
+/// The streamed writer gives the bytes of writing the output model, for
+/// both quantities and with the ambient term, also after the scratch arrays
+/// are released and the input's geometry is dropped.
+#[test]
+fn streamed_output_is_the_written_model() {
+    let model = patches(&enclosure(), 0.34);
+    for (output, ambient) in [
+        (radiosity::Output::Radiosity, false),
+        (radiosity::Output::Radiosity, true),
+        (radiosity::Output::Irradiance, true),
+    ] {
+        let mesh = libmesh::Mesh::from_model(&model, 1e-9).unwrap();
+        let vis = RayVisibility::new(&mesh);
+        let opts = Options {
+            max_shots: Some(12),
+            output,
+            ambient,
+            ..Options::default()
+        };
+        let mut solver = Solver::new(mesh, &model.materials, &vis, opts);
+        solver.solve(None, |_| {});
+        let want = ug::write_string(&solver.to_model(&model));
+        let mut out = Vec::new();
+        solver.write_ug(&model, &mut out).unwrap();
+        assert_eq!(String::from_utf8(out).unwrap(), want);
+        solver.release_scratch();
+        let mut bare = model.clone();
+        bare.items
+            .retain(|it| !matches!(it, ug::Item::Vertex(_) | ug::Item::Face(_)));
+        for f in &mut bare.faces {
+            f.contours.clear();
+        }
+        let mut out = Vec::new();
+        solver.write_ug(&bare, &mut out).unwrap();
+        assert_eq!(String::from_utf8(out).unwrap(), want);
+        // A shot after releasing the scratch still works.
+        let before = solver.shots.len();
+        let p = libmesh::PatchId(solver.shots[0].patch);
+        solver.shoot(p);
+        assert!(solver.shots.len() >= before);
+    }
+}
+
 #[test]
 fn receivers_on_the_shooters_edge_get_the_limit_from_inside() {
     // A 1 x 1 emitting wall standing on the edge of a 1 x 1 floor (a concave
