@@ -65,7 +65,11 @@ fn cornell_box_unlit_from_its_camera() {
     if gpu_skip(&out) {
         return;
     }
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert_image_golden("fixtures/view/cornell-unlit.png", &out.stdout);
 }
 
@@ -81,24 +85,40 @@ fn dirty_cornell_box_through_the_whole_chain_to_a_picture() {
         ("ugcopl", vec![]),
         ("ugclean", vec![]),
         ("ugcut", vec!["-l", "100"]),
-        ("ugrad", vec!["--converge", "1e-2", "-q"]),
+        (
+            "ugrad",
+            vec!["--converge", "1e-2", "-q", "--visibility", "ray"],
+        ),
     ] {
         let out = run(tool, &args, Some(&model));
-        assert!(out.status.success(), "{tool}: {}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{tool}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         model = out.stdout;
     }
     let out = run("ugview", &["--size", "240x240"], Some(&model));
     if gpu_skip(&out) {
         return;
     }
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert_image_golden("fixtures/view/cornell-lit.png", &out.stdout);
     // The light (ceiling centre, top of the picture) is the brightest thing in it.
     let img = image::load_from_memory(&out.stdout).unwrap().to_rgb8();
-    let lum = |p: &image::Rgb<u8>| 0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2]);
+    let lum = |p: &image::Rgb<u8>| {
+        0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])
+    };
     let (x, y, _) = img
         .enumerate_pixels()
         .map(|(x, y, p)| (x, y, lum(p)))
         .fold((0, 0, -1.0), |best, c| if c.2 > best.2 { c } else { best });
-    assert!((95..145).contains(&x) && (20..45).contains(&y), "brightest pixel at {x},{y}");
+    assert!(
+        (95..145).contains(&x) && (20..45).contains(&y),
+        "brightest pixel at {x},{y}"
+    );
 }

@@ -26,8 +26,15 @@ enum VisibilityKind {
     Auto,
     /// CPU ray casting against a BVH (the reference).
     Ray,
-    /// The GPU hemi-cube (not in this build yet).
+    /// The GPU hemi-cube (wgpu), questionable vertices ray cast.
     Hemicube,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum BackendArg {
+    Auto,
+    Vulkan,
+    Gl,
 }
 
 /// Progressive radiosity on a patch-meshed UniGrafix model (Smith 1991).
@@ -78,9 +85,24 @@ struct Args {
     /// Add a display ambient term for the energy not yet shot.
     #[arg(long)]
     ambient: bool,
-    /// How visibility is decided.
+    /// How visibility is decided. auto: the hemi-cube on a hardware GPU,
+    /// else ray casting (on a software rasteriser such as lavapipe the CPU
+    /// ray caster is faster).
     #[arg(long, value_enum, default_value = "auto")]
     visibility: VisibilityKind,
+    /// Hemi-cube resolution: pixels across its top face (a multiple of 64).
+    #[arg(long, default_value_t = 512, value_name = "N", value_parser = hemicube_res)]
+    hemicube_res: u32,
+    /// Graphics API for the hemi-cube.
+    #[arg(long, value_enum, default_value = "auto")]
+    gpu_backend: BackendArg,
+}
+
+fn hemicube_res(s: &str) -> Result<u32, String> {
+    match s.parse::<u32>() {
+        Ok(v) if (64..=8192).contains(&v) && v.is_multiple_of(64) => Ok(v),
+        _ => Err(format!("'{s}' is not a multiple of 64 in 64..8192")),
+    }
 }
 
 fn fraction(s: &str) -> Result<f64, String> {
@@ -90,24 +112,112 @@ fn fraction(s: &str) -> Result<f64, String> {
     }
 }
 
+/// Large allocations (the per-vertex and per-element arrays) from `mmap`
+/// instead of the heap: glibc otherwise raises its mmap threshold to the size
+/// of the largest block freed so far (the input text), after which growing
+/// arrays are copied within the heap and the space they leave stays resident
+/// (with this, the peak resident memory of a solve is about a quarter lower).
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn tune_allocator() {
+    unsafe extern "C" {
+        fn mallopt(param: i32, value: i32) -> i32;
+    }
+    const M_MMAP_THRESHOLD: i32 = -3;
+    // SAFETY: mallopt only sets a glibc allocation parameter; it is called
+    // first thing in main, before any other thread exists.
+    unsafe {
+        mallopt(M_MMAP_THRESHOLD, 128 * 1024);
+    }
+}
+
+#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+fn tune_allocator() {}
+
 fn main() -> std::process::ExitCode {
+    // SAFETY: first thing in main, before any thread exists.
+    unsafe { gpu::prepare_env() };
+    tune_allocator();
     let args = Args::parse();
     cli::run(|| {
         let c = &args.common;
-        let model = c.load_flat()?;
+        let mut model = c.load_flat()?;
+        let rss_input = memory_kb("VmRSS");
         let eps = cli::epsilon(args.epsilon, &model);
         let mesh = libmesh::Mesh::from_model(&model, eps)
             .map_err(|e| cli::Failure::input(format!("error: {e}")))?;
-        match args.visibility {
+        let backend = match args.gpu_backend {
+            BackendArg::Auto => gpu::Backend::Auto,
+            BackendArg::Vulkan => gpu::Backend::Vulkan,
+            BackendArg::Gl => gpu::Backend::Gl,
+        };
+        let hc_opts = hemicube::Options {
+            res: args.hemicube_res,
+            ..Default::default()
+        };
+        let hc = match args.visibility {
+            VisibilityKind::Ray => None,
             VisibilityKind::Hemicube => {
-                return Err(cli::Failure::runtime(
-                    "error: the GPU hemi-cube is not part of this build yet; use --visibility ray",
+                let g = gpu::open(&gpu::Request {
+                    backend,
+                    ..Default::default()
+                })
+                .map_err(|e| cli::Failure::runtime(format!("error: --visibility hemicube: {e}")))?;
+                c.verbose(format!(
+                    "visibility: hemi-cube {}² on {}",
+                    args.hemicube_res,
+                    g.describe()
                 ));
+                Some(hemicube::Hemicube::new(g, &mesh, hc_opts).map_err(|e| {
+                    cli::Failure::runtime(format!("error: --visibility hemicube: {e}"))
+                })?)
             }
-            VisibilityKind::Auto => c.verbose("note: visibility by CPU ray casting (the GPU hemi-cube is not part of this build yet)"),
-            VisibilityKind::Ray => {}
-        }
-        let vis = radiosity::RayVisibility::new(&mesh);
+            VisibilityKind::Auto => match gpu::open(&gpu::Request {
+                backend,
+                ..Default::default()
+            }) {
+                Ok(g) if !g.is_cpu() => match hemicube::Hemicube::new(g, &mesh, hc_opts) {
+                    Ok(h) => {
+                        c.verbose(format!(
+                            "visibility: hemi-cube {}² on {}",
+                            args.hemicube_res,
+                            h.describe()
+                        ));
+                        Some(h)
+                    }
+                    Err(e) => {
+                        if !c.quiet {
+                            eprintln!(
+                                "note: hemi-cube unavailable ({e}); visibility by CPU ray casting"
+                            );
+                        }
+                        None
+                    }
+                },
+                Ok(g) => {
+                    c.verbose(format!(
+                        "note: visibility by CPU ray casting (the only GPU adapter, {}, is a software rasteriser; --visibility hemicube uses it anyway)",
+                        g.describe()
+                    ));
+                    None
+                }
+                Err(e) => {
+                    if !c.quiet {
+                        eprintln!(
+                            "note: no GPU for the hemi-cube ({e}); visibility by CPU ray casting"
+                        );
+                    }
+                    None
+                }
+            },
+        };
+        let ray;
+        let vis: &dyn radiosity::Visibility = match &hc {
+            Some(h) => h,
+            None => {
+                ray = radiosity::RayVisibility::new(&mesh);
+                &ray
+            }
+        };
         let opts = radiosity::Options {
             converge: args.converge,
             max_shots: args.max_shots,
@@ -134,7 +244,22 @@ fn main() -> std::process::ExitCode {
                 }
             });
         }
-        let mut solver = radiosity::Solver::new(mesh, &model.materials, &vis, opts);
+        let mut solver = radiosity::Solver::new(mesh, &model.materials, vis, opts);
+        // The output needs only the input's names, colours, materials and
+        // non-geometry statements: drop its geometry.
+        model.items.retain(|it| {
+            !matches!(
+                it,
+                ug::Item::Vertex(_) | ug::Item::Face(_) | ug::Item::Wire(_)
+            )
+        });
+        model.items.shrink_to_fit();
+        for f in &mut model.faces {
+            f.contours = Vec::new();
+        }
+        for w in &mut model.wires {
+            w.polylines = Vec::new();
+        }
         let (g, m, p) = solver.thresholds();
         c.verbose(format!(
             "{} patches on {} surfaces, {} vertices; emitted {:.6e}; gradient {g:.4e}, min edge {m:.4e}, penumbra size {p:.4e}; epsilon {eps:e}",
@@ -158,7 +283,6 @@ fn main() -> std::process::ExitCode {
             bar.set_position(done as u64);
         });
         bar.finish_and_clear();
-        let out = solver.to_model(&model);
         if !c.quiet {
             match stop {
                 radiosity::Stop::Dark => {
@@ -177,6 +301,34 @@ fn main() -> std::process::ExitCode {
             solver.mesh.num_vertices(),
             solver.shots.last().map_or(1.0, |s| s.unshot)
         ));
-        c.write_model(&out)
+        // Streamed: the output model and its text are never held in memory.
+        solver.release_scratch();
+        cli::write_streamed(c.output.as_deref(), |w| solver.write_ug(&model, w))?;
+        if let (Some(input), Some(peak)) = (rss_input, memory_kb("VmHWM")) {
+            let leaves = solver.mesh.num_leaves().max(1) as f64;
+            c.verbose(format!(
+                "memory: peak RSS {:.1} MB, {:.1} MB after reading the input; {} leaf elements, {} vertices: {:.0} bytes per leaf element over the input ({:.0} in all)",
+                peak as f64 / 1024.0,
+                input as f64 / 1024.0,
+                solver.mesh.num_leaves(),
+                solver.mesh.num_vertices(),
+                peak.saturating_sub(input) as f64 * 1024.0 / leaves,
+                peak as f64 * 1024.0 / leaves,
+            ));
+        }
+        Ok(())
     })
+}
+
+/// A field of /proc/self/status in kB (`VmRSS`: resident now, `VmHWM`: peak
+/// resident); `None` where there is no such file.
+fn memory_kb(field: &str) -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with(field))?;
+    line[field.len() + 1..]
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()
 }

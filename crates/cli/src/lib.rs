@@ -172,27 +172,72 @@ fn read_stdin() -> Result<Input, Failure> {
     })
 }
 
-/// Writes all of `bytes` to `path` (atomically: temporary file, then rename) or to stdout.
-/// A closed stdout pipe is not an error.
+/// Writes all of `bytes` to `path` (atomically: temporary file, then rename;
+/// a device or pipe in place) or to stdout. A closed stdout pipe is not an error.
 pub fn write_output(path: Option<&Path>, bytes: &[u8]) -> Result<(), Failure> {
+    write_streamed(path, |w| w.write_all(bytes))
+}
+
+/// Writes the output through `body` as it is produced: `-o FILE` atomically
+/// (a temporary file in the same directory, renamed into place once
+/// complete), otherwise stdout, where a closed pipe is not an error. `-o`
+/// naming a device or a pipe (`-o /dev/null`) is written in place: renaming
+/// a regular file over it would replace the device (as root, /dev/null
+/// became a regular file that way, and later readers of /dev/null read our
+/// output).
+pub fn write_streamed(
+    path: Option<&Path>,
+    body: impl FnOnce(&mut dyn Write) -> io::Result<()>,
+) -> Result<(), Failure> {
     match path {
-        Some(p) if p != Path::new("-") => {
-            let dir = match p.parent() {
-                Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-                _ => PathBuf::from("."),
-            };
+        Some(p) if std::fs::metadata(p).is_ok_and(|m| !m.is_file() && !m.is_dir()) => {
+            // A device or pipe (`-o /dev/null`): written in place, never replaced.
             let fail = |e: &dyn std::fmt::Display| {
                 Failure::runtime(format!("{}: error: cannot write: {e}", p.display()))
             };
-            let mut tmp = tempfile::NamedTempFile::new_in(&dir).map_err(|e| fail(&e))?;
-            tmp.write_all(bytes).map_err(|e| fail(&e))?;
-            tmp.as_file().sync_all().map_err(|e| fail(&e))?;
-            tmp.persist(p).map_err(|e| fail(&e.error))?;
+            let file = std::fs::OpenOptions::new()
+                .write(true)
+                .open(p)
+                .map_err(|e| fail(&e))?;
+            let mut w = io::BufWriter::with_capacity(1 << 16, file);
+            body(&mut w).and_then(|_| w.flush()).map_err(|e| fail(&e))
+        }
+        Some(p) if p != Path::new("-") => {
+            let fail = |e: &dyn std::fmt::Display| {
+                Failure::runtime(format!("{}: error: cannot write: {e}", p.display()))
+            };
+            let dir = match p.parent() {
+                Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+                _ => std::path::PathBuf::from("."),
+            };
+            let file_name = p
+                .file_name()
+                .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+            let tmp = dir.join(format!(".{file_name}.{}.tmp", std::process::id()));
+            let mut opts = std::fs::OpenOptions::new();
+            opts.write(true).create_new(true);
+            #[cfg(unix)]
+            {
+                use std::os::unix::fs::OpenOptionsExt;
+                opts.mode(0o600);
+            }
+            let file = opts.open(&tmp).map_err(|e| fail(&e))?;
+            let result = (|| {
+                let mut w = io::BufWriter::with_capacity(1 << 16, file);
+                body(&mut w)?;
+                let file = w.into_inner().map_err(|e| e.into_error())?;
+                file.sync_all()?;
+                std::fs::rename(&tmp, p)
+            })();
+            if let Err(e) = result {
+                let _ = std::fs::remove_file(&tmp);
+                return Err(fail(&e));
+            }
             Ok(())
         }
         _ => {
             let mut out = io::stdout().lock();
-            match out.write_all(bytes).and_then(|_| out.flush()) {
+            match body(&mut out).and_then(|_| out.flush()) {
                 Ok(()) => Ok(()),
                 Err(e) if e.kind() == io::ErrorKind::BrokenPipe => Ok(()),
                 Err(e) => Err(Failure::runtime(format!(
@@ -234,5 +279,36 @@ pub fn parse_epsilon(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
         _ => Err(format!("'{s}' is not a finite, non-negative number")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn files_are_replaced_atomically_and_devices_written_in_place() {
+        let dir = std::env::temp_dir().join(format!("cli-write-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let f = dir.join("out.ug");
+        std::fs::write(&f, "old").unwrap();
+        write_output(Some(&f), b"new").unwrap();
+        assert_eq!(std::fs::read_to_string(&f).unwrap(), "new");
+        // No temporary file is left behind.
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+        std::fs::remove_dir_all(&dir).unwrap();
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::FileTypeExt;
+            let null = Path::new("/dev/null");
+            if std::fs::metadata(null).is_ok_and(|m| m.file_type().is_char_device()) {
+                write_output(Some(null), b"discarded").unwrap();
+                let m = std::fs::metadata(null).unwrap();
+                assert!(
+                    m.file_type().is_char_device(),
+                    "/dev/null must stay a device"
+                );
+            }
+        }
     }
 }
