@@ -128,3 +128,131 @@ fn missing_adapter_fails_hemicube_and_falls_back_under_auto() {
     let err = String::from_utf8_lossy(&auto.stderr);
     assert!(err.contains("visibility by CPU ray casting"), "{err}");
 }
+
+/// Per method: (vertex tests, wrong before ray casting, wrong after) from
+/// every 7th patch's centre of a patch model.
+fn agreement(patches_ug: &[u8], method: hemicube::Method) -> Option<(usize, usize, usize)> {
+    use glam::DVec3;
+    use libmesh::VertId;
+    use radiosity::Visibility;
+    let g = match gpu::open(&gpu::Request {
+        optional: hemicube::POINTS_FEATURE,
+        ..Default::default()
+    }) {
+        Ok(g) => g,
+        Err(e) if !require_gpu() => {
+            eprintln!("skipping GPU test: {e}");
+            return None;
+        }
+        Err(e) => panic!("UG_REQUIRE_GPU=1 but no GPU: {e}"),
+    };
+    let model = ug::parse(patches_ug, "patches.ug").unwrap().model;
+    let mesh = libmesh::Mesh::from_model(&model, 1e-6 * 1000.0).unwrap();
+    let hc = hemicube::Hemicube::new(
+        g,
+        &mesh,
+        hemicube::Options {
+            method,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let ray = radiosity::RayVisibility::new(&mesh);
+    let (mut total, mut before, mut after) = (0, 0, 0);
+    let patches: Vec<_> = mesh.patches().collect();
+    for &p in patches.iter().step_by(7) {
+        let c = mesh.patch_corners(p);
+        let from = c.iter().map(|&v| mesh.vertex_pos(v)).sum::<DVec3>() / c.len() as f64;
+        let s = mesh.patch_surface(p);
+        let n = mesh.surface_normal(s);
+        let cand: Vec<VertId> = (0..mesh.num_vertices() as u32)
+            .map(VertId)
+            .filter(|&v| {
+                let d = mesh.vertex_pos(v) - from;
+                mesh.vertex_surface(v) != s
+                    && d.dot(n) >= 0.0
+                    && -d.dot(mesh.vertex_normal(v)) > 0.0
+            })
+            .collect();
+        let raw = hc.classify(&mesh, from, s, &cand).unwrap();
+        let a = hc.visible(&mesh, from, s, &cand);
+        let b = ray.visible(&mesh, from, s, &cand);
+        total += b.len();
+        before += raw.raw.iter().zip(&b).filter(|(x, y)| x != y).count();
+        after += a.iter().zip(&b).filter(|(x, y)| x != y).count();
+        if std::env::var("HC_DEBUG").is_ok() {
+            for (k, (x, y)) in a.iter().zip(&b).enumerate() {
+                if x != y {
+                    let v = cand[k];
+                    eprintln!(
+                        "from {from} n {n} to {} (n {}) q {}: hemicube {x} ray {y}",
+                        mesh.vertex_pos(v),
+                        mesh.vertex_normal(v),
+                        raw.questionable[k]
+                    );
+                }
+            }
+        }
+    }
+    assert_eq!(hc.stats().fallbacks, 0, "{:?}", hc.last_error());
+    eprintln!(
+        "{}: {total} tests, wrong before ray casting {before} ({:.3}%), after {after} ({:.3}%)",
+        method.name(),
+        100.0 * before as f64 / total as f64,
+        100.0 * after as f64 / total as f64
+    );
+    Some((total, before, after))
+}
+
+fn clean_chain(model: Vec<u8>, len: &str) -> Vec<u8> {
+    let mut m = model;
+    for (tool, args) in [
+        ("ugplanar", vec![]),
+        ("ugvlmerge", vec![]),
+        ("ugflip", vec![]),
+        ("ugisect", vec![]),
+        ("ugcopl", vec![]),
+        ("ugclean", vec![]),
+        ("ugcut", vec!["-l", len]),
+    ] {
+        let out = run(tool, &args, Some(&m));
+        assert!(
+            out.status.success(),
+            "{tool}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        m = out.stdout;
+    }
+    m
+}
+
+#[test]
+fn every_method_agrees_with_rays_on_the_cornell_box_and_a_building() {
+    let cornell = clean_chain(std::fs::read(fixture("cornell-box.ug")).unwrap(), "60");
+    let b = run(
+        "ugbuilding",
+        &["--rooms", "2", "--furniture", "2", "--seed", "3"],
+        None,
+    );
+    assert!(b.status.success(), "{}", String::from_utf8_lossy(&b.stderr));
+    let building = clean_chain(b.stdout, "0.5");
+    for (name, scene) in [("cornell", &cornell), ("building", &building)] {
+        for method in [
+            hemicube::Method::Depth,
+            hemicube::Method::Points,
+            hemicube::Method::Decal,
+        ] {
+            let Some((total, before, after)) = agreement(scene, method) else {
+                return;
+            };
+            eprintln!("  ({name})");
+            assert!(total > 1000, "{name}: {total}");
+            // The goal: at most 0.1% misclassified after ray casting.
+            assert!(
+                (after as f64) <= 1e-3 * total as f64,
+                "{name} {method:?}: {after} of {total}"
+            );
+            assert!(after <= before);
+        }
+    }
+}

@@ -31,6 +31,13 @@ enum VisibilityKind {
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
+enum MethodArg {
+    Depth,
+    Points,
+    Decal,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
 enum BackendArg {
     Auto,
     Vulkan,
@@ -93,6 +100,11 @@ struct Args {
     /// Hemi-cube resolution: pixels across its top face (a multiple of 64).
     #[arg(long, default_value_t = 512, value_name = "N", value_parser = hemicube_res)]
     hemicube_res: u32,
+    /// How the hemi-cube finds visible vertices: depth (depth image and a
+    /// compute test), points (vertex points with early depth test; needs
+    /// SHADER_EARLY_DEPTH_TEST) or decal (the report's algorithm, §4.3–4.4).
+    #[arg(long, value_enum, default_value = "depth")]
+    hemicube_method: MethodArg,
     /// Graphics API for the hemi-cube.
     #[arg(long, value_enum, default_value = "auto")]
     gpu_backend: BackendArg,
@@ -152,18 +164,27 @@ fn main() -> std::process::ExitCode {
         };
         let hc_opts = hemicube::Options {
             res: args.hemicube_res,
+            method: match args.hemicube_method {
+                MethodArg::Depth => hemicube::Method::Depth,
+                MethodArg::Points => hemicube::Method::Points,
+                MethodArg::Decal => hemicube::Method::Decal,
+            },
+            ..Default::default()
+        };
+        let request = gpu::Request {
+            backend,
+            optional: hemicube::POINTS_FEATURE,
             ..Default::default()
         };
         let hc = match args.visibility {
             VisibilityKind::Ray => None,
             VisibilityKind::Hemicube => {
-                let g = gpu::open(&gpu::Request {
-                    backend,
-                    ..Default::default()
-                })
-                .map_err(|e| cli::Failure::runtime(format!("error: --visibility hemicube: {e}")))?;
+                let g = gpu::open(&request).map_err(|e| {
+                    cli::Failure::runtime(format!("error: --visibility hemicube: {e}"))
+                })?;
                 c.verbose(format!(
-                    "visibility: hemi-cube {}² on {}",
+                    "visibility: hemi-cube ({}, {}²) on {}",
+                    hc_opts.method.name(),
                     args.hemicube_res,
                     g.describe()
                 ));
@@ -171,14 +192,12 @@ fn main() -> std::process::ExitCode {
                     cli::Failure::runtime(format!("error: --visibility hemicube: {e}"))
                 })?)
             }
-            VisibilityKind::Auto => match gpu::open(&gpu::Request {
-                backend,
-                ..Default::default()
-            }) {
+            VisibilityKind::Auto => match gpu::open(&request) {
                 Ok(g) if !g.is_cpu() => match hemicube::Hemicube::new(g, &mesh, hc_opts) {
                     Ok(h) => {
                         c.verbose(format!(
-                            "visibility: hemi-cube {}² on {}",
+                            "visibility: hemi-cube ({}, {}²) on {}, a hardware GPU (faster than CPU rays)",
+                            hc_opts.method.name(),
                             args.hemicube_res,
                             h.describe()
                         ));
@@ -301,6 +320,22 @@ fn main() -> std::process::ExitCode {
             solver.mesh.num_vertices(),
             solver.shots.last().map_or(1.0, |s| s.unshot)
         ));
+        if let Some(h) = &hc {
+            let st = h.stats();
+            c.verbose(format!(
+                "hemi-cube: {} visibility calls, {} vertices tested, {} questionable and ray cast ({:.2}%), {} calls fell back to rays",
+                st.shots,
+                st.candidates,
+                st.questionable,
+                100.0 * st.questionable as f64 / st.candidates.max(1) as f64,
+                st.fallbacks
+            ));
+            if let Some(e) = h.last_error() {
+                eprintln!(
+                    "warning: the GPU failed during the solve; those shots used ray casting: {e}"
+                );
+            }
+        }
         // Streamed: the output model and its text are never held in memory.
         solver.release_scratch();
         cli::write_streamed(c.output.as_deref(), |w| solver.write_ug(&model, w))?;

@@ -30,10 +30,54 @@ pub const SHADER: &str = include_str!("hemicube.wgsl");
 /// How visible vertices are found on the hemi-cube.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Method {
-    /// Depth-only surface pass, then a compute test of every vertex.
+    /// Depth-only surface pass, then a compute test of every vertex against
+    /// the depth at its pixel and the 3 × 3 around it.
     #[default]
     Depth,
+    /// Depth-only surface pass, then the vertices as points with the depth
+    /// test on, each surviving fragment marking its vertex in a storage
+    /// buffer (needs the native feature SHADER_EARLY_DEPTH_TEST).
+    Points,
+    /// The report's decal algorithm (§4.3–4.4): per surface a colour pass,
+    /// its vertices as id points, a depth pass; the id image read back and
+    /// redrawn with the vertices not yet seen until no new one appears.
+    Decal,
 }
+
+impl Method {
+    pub fn parse(s: &str) -> Option<Method> {
+        match s {
+            "depth" => Some(Method::Depth),
+            "points" => Some(Method::Points),
+            "decal" => Some(Method::Decal),
+            _ => None,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Depth => "depth",
+            Method::Points => "points",
+            Method::Decal => "decal",
+        }
+    }
+}
+
+/// The GPU's answer for each candidate before the questionable ones are ray
+/// cast: `raw` is what the hemi-cube saw, `questionable` marks those the
+/// CPU ray casts (§4.5).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Classified {
+    pub raw: Vec<bool>,
+    pub questionable: Vec<bool>,
+}
+
+/// The points method needs this feature of the adapter.
+pub const POINTS_FEATURE: wgpu::Features = wgpu::Features::SHADER_EARLY_DEPTH_TEST;
+
+/// Source of the points method's shader.
+pub const POINTS_SHADER: &str = include_str!("points.wgsl");
+/// Source of the decal method's shader.
+pub const DECAL_SHADER: &str = include_str!("decal.wgsl");
 
 /// Hemi-cube settings.
 #[derive(Clone, Copy, Debug)]
@@ -83,19 +127,40 @@ struct ShotU {
     params: [f32; 4],
 }
 
+struct PointsPipes {
+    pipeline: wgpu::RenderPipeline,
+    bgl: wgpu::BindGroupLayout,
+}
+
+struct DecalPipes {
+    surface: wgpu::RenderPipeline,
+    points: wgpu::RenderPipeline,
+    depth: wgpu::RenderPipeline,
+    id_tex: wgpu::Texture,
+    id_view: wgpu::TextureView,
+}
+
 struct Gpus {
     g: Gpu,
     vbuf: wgpu::Buffer,
     ibuf: wgpu::Buffer,
     n_indices: u32,
+    /// Index ranges (start, count) of each surface's triangles, in surface order.
+    surface_ranges: Vec<(u32, u32)>,
     shot_buf: wgpu::Buffer,
-    face_buf: wgpu::Buffer,
+    _face_buf: wgpu::Buffer,
     bind0: wgpu::BindGroup,
     bgl1: wgpu::BindGroupLayout,
     depth_pipeline: wgpu::RenderPipeline,
+    id_pipeline: wgpu::RenderPipeline,
     test_pipeline: wgpu::ComputePipeline,
-    depth_tex: wgpu::Texture,
+    _surface_ids: wgpu::Texture,
+    surface_ids_view: wgpu::TextureView,
+    normal_buf: wgpu::Buffer,
+    _depth_tex: wgpu::Texture,
     depth_view: wgpu::TextureView,
+    points: Option<PointsPipes>,
+    decal: Option<DecalPipes>,
 }
 
 /// The hemi-cube visibility oracle.
@@ -113,9 +178,36 @@ pub struct Hemicube {
 }
 
 const FACE_STRIDE: u64 = 256;
+/// Another surface nearer than a vertex by less than this relative depth
+/// leaves the vertex uncertain (ray cast) rather than hidden.
+const UNCERTAIN: f32 = 1e-3;
+const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+const ID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+
+/// Reversed depth: a negative slope-scaled bias pushes each surface away, so
+/// that vertices on it pass the test.
+const SURFACE_BIAS: wgpu::DepthBiasState = wgpu::DepthBiasState {
+    constant: 0,
+    slope_scale: -2.0,
+    clamp: 0.0,
+};
+
+fn depth_state(
+    write: bool,
+    compare: wgpu::CompareFunction,
+    bias: wgpu::DepthBiasState,
+) -> Option<wgpu::DepthStencilState> {
+    Some(wgpu::DepthStencilState {
+        format: DEPTH_FORMAT,
+        depth_write_enabled: Some(write),
+        depth_compare: Some(compare),
+        stencil: Default::default(),
+        bias,
+    })
+}
 
 impl Hemicube {
-    /// Uploads the patches of `mesh` and builds the pipelines.
+    /// Uploads the patches of `mesh` and builds the pipelines of `opts.method`.
     pub fn new(g: Gpu, mesh: &Mesh, opts: Options) -> Result<Hemicube, GpuError> {
         if opts.res < 64 || !opts.res.is_multiple_of(64) || opts.res > 8192 {
             return Err(GpuError(format!(
@@ -130,7 +222,14 @@ impl Hemicube {
                 opts.res, g.limits.max_texture_dimension_2d
             )));
         }
-        // The scene: patch corners relative to the box centre, in f32.
+        if opts.method == Method::Points && !g.features.contains(POINTS_FEATURE) {
+            return Err(GpuError(format!(
+                "the points method needs the feature SHADER_EARLY_DEPTH_TEST, which {} lacks",
+                g.describe()
+            )));
+        }
+        // The scene: patch corners relative to the box centre, in f32, the
+        // triangles grouped by surface.
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
         for p in mesh.patches() {
@@ -152,20 +251,35 @@ impl Hemicube {
         };
         let mut verts: Vec<[f32; 4]> = Vec::new();
         let mut idx: Vec<u32> = Vec::new();
-        for p in mesh.patches() {
-            let c = mesh.patch_corners(p);
-            let base = verts.len() as u32;
-            for &v in c {
-                verts.push(
-                    (mesh.vertex_pos(v) - origin)
-                        .as_vec3()
-                        .extend(1.0)
-                        .to_array(),
-                );
+        let mut surface_ranges = Vec::with_capacity(mesh.num_surfaces());
+        for s in mesh.surfaces() {
+            let start = idx.len() as u32;
+            for &p in mesh.surface_patches(s) {
+                let c = mesh.patch_corners(p);
+                let base = verts.len() as u32;
+                for &v in c {
+                    let q = (mesh.vertex_pos(v) - origin).as_vec3();
+                    verts.push([q.x, q.y, q.z, f32::from_bits(s.0)]);
+                }
+                for k in 1..c.len() as u32 - 1 {
+                    idx.extend([base, base + k, base + k + 1]);
+                }
             }
-            for k in 1..c.len() as u32 - 1 {
-                idx.extend([base, base + k, base + k + 1]);
-            }
+            surface_ranges.push((start, idx.len() as u32 - start));
+        }
+        let n_indices = idx.len() as u32;
+        let mut normals: Vec<[f32; 4]> = mesh
+            .surfaces()
+            .map(|s| {
+                mesh.surface_normal(s)
+                    .normalize()
+                    .as_vec3()
+                    .extend(0.0)
+                    .to_array()
+            })
+            .collect();
+        if normals.is_empty() {
+            normals.push([0.0; 4]);
         }
         if verts.is_empty() {
             verts.push([0.0; 4]);
@@ -184,6 +298,11 @@ impl Hemicube {
             "hemicube indices",
             bytemuck::cast_slice(&idx),
             wgpu::BufferUsages::INDEX,
+        );
+        let normal_buf = g.buffer_init(
+            "surface normals",
+            bytemuck::cast_slice(&normals),
+            wgpu::BufferUsages::STORAGE,
         );
         let shot_buf = dev.create_buffer(&wgpu::BufferDescriptor {
             label: Some("shot"),
@@ -231,9 +350,9 @@ impl Hemicube {
                 },
             ],
         });
-        let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
+        let storage = |binding, read_only, stage| wgpu::BindGroupLayoutEntry {
             binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
+            visibility: stage,
             ty: wgpu::BindingType::Buffer {
                 ty: wgpu::BufferBindingType::Storage { read_only },
                 has_dynamic_offset: false,
@@ -241,12 +360,13 @@ impl Hemicube {
             },
             count: None,
         };
+        let cs = wgpu::ShaderStages::COMPUTE;
         let bgl1 = dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("hemicube test"),
             entries: &[
                 wgpu::BindGroupLayoutEntry {
                     binding: 0,
-                    visibility: wgpu::ShaderStages::COMPUTE,
+                    visibility: cs,
                     ty: wgpu::BindingType::Texture {
                         sample_type: wgpu::TextureSampleType::Depth,
                         view_dimension: wgpu::TextureViewDimension::D2,
@@ -254,8 +374,19 @@ impl Hemicube {
                     },
                     count: None,
                 },
-                storage(1, true),
-                storage(2, false),
+                storage(1, true, cs),
+                storage(2, false, cs),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 3,
+                    visibility: cs,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Uint,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                storage(4, true, cs),
             ],
         });
         let render_layout = dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -269,6 +400,20 @@ impl Hemicube {
             immediate_size: 0,
         });
         let attrs = wgpu::vertex_attr_array![0 => Float32x4];
+        let vlayout = wgpu::VertexBufferLayout {
+            array_stride: 16,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &attrs,
+        };
+        let tri = wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::TriangleList,
+            cull_mode: None,
+            ..Default::default()
+        };
+        let pts = wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::PointList,
+            ..Default::default()
+        };
         let depth_pipeline = dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("hemicube depth"),
             layout: Some(&render_layout),
@@ -276,32 +421,37 @@ impl Hemicube {
                 module: &module,
                 entry_point: Some("vs_depth"),
                 compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: 16,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &attrs,
-                })],
+                buffers: &[Some(vlayout.clone())],
             },
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::TriangleList,
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: wgpu::TextureFormat::Depth32Float,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Greater),
-                stencil: Default::default(),
-                // Reversed depth: a negative slope-scaled bias pushes each
-                // surface away, so that vertices on it pass the test.
-                bias: wgpu::DepthBiasState {
-                    constant: 0,
-                    slope_scale: -2.0,
-                    clamp: 0.0,
-                },
-            }),
+            primitive: tri,
+            depth_stencil: depth_state(true, wgpu::CompareFunction::Greater, SURFACE_BIAS),
             multisample: Default::default(),
             fragment: None,
+            multiview_mask: None,
+            cache: None,
+        });
+        let id_pipeline = dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("hemicube surface ids"),
+            layout: Some(&render_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_depth"),
+                compilation_options: Default::default(),
+                buffers: &[Some(vlayout.clone())],
+            },
+            primitive: tri,
+            depth_stencil: depth_state(true, wgpu::CompareFunction::Greater, Default::default()),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_id"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: ID_FORMAT,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
             multiview_mask: None,
             cache: None,
         });
@@ -313,36 +463,182 @@ impl Hemicube {
             compilation_options: Default::default(),
             cache: None,
         });
-        let depth_tex = dev.create_texture(&wgpu::TextureDescriptor {
-            label: Some("hemicube depth"),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Depth32Float,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
+        let tex = |label, format, usage| {
+            dev.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width: w,
+                    height: h,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let depth_tex = tex(
+            "hemicube depth",
+            DEPTH_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
         let depth_view = depth_tex.create_view(&Default::default());
+        let surface_ids = tex(
+            "hemicube surface ids",
+            ID_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
+        let surface_ids_view = surface_ids.create_view(&Default::default());
+        let points = if opts.method == Method::Points {
+            let pmod = g.shader("points.wgsl", POINTS_SHADER)?;
+            let fs = wgpu::ShaderStages::FRAGMENT;
+            let bgl = dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("hemicube points"),
+                entries: &[storage(0, false, fs)],
+            });
+            let layout = dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("hemicube points"),
+                bind_group_layouts: &[Some(&bgl0), Some(&bgl)],
+                immediate_size: 0,
+            });
+            let pipeline = dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("hemicube points"),
+                layout: Some(&layout),
+                vertex: wgpu::VertexState {
+                    module: &pmod,
+                    entry_point: Some("vs_point"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(vlayout.clone())],
+                },
+                primitive: pts,
+                depth_stencil: depth_state(
+                    false,
+                    wgpu::CompareFunction::GreaterEqual,
+                    Default::default(),
+                ),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &pmod,
+                    entry_point: Some("fs_point"),
+                    compilation_options: Default::default(),
+                    targets: &[],
+                }),
+                multiview_mask: None,
+                cache: None,
+            });
+            Some(PointsPipes { pipeline, bgl })
+        } else {
+            None
+        };
+        let decal = if opts.method == Method::Decal {
+            let dmod = g.shader("decal.wgsl", DECAL_SHADER)?;
+            let target = |write| {
+                [Some(wgpu::ColorTargetState {
+                    format: ID_FORMAT,
+                    blend: None,
+                    write_mask: if write {
+                        wgpu::ColorWrites::ALL
+                    } else {
+                        wgpu::ColorWrites::empty()
+                    },
+                })]
+            };
+            let (t_on, t_off) = (target(true), target(false));
+            let pipe = |label, vs, fs, prim, depth, targets: &[Option<wgpu::ColorTargetState>]| {
+                dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(&render_layout),
+                    vertex: wgpu::VertexState {
+                        module: &dmod,
+                        entry_point: Some(vs),
+                        compilation_options: Default::default(),
+                        buffers: &[Some(vlayout.clone())],
+                    },
+                    primitive: prim,
+                    depth_stencil: depth,
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &dmod,
+                        entry_point: Some(fs),
+                        compilation_options: Default::default(),
+                        targets,
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+            };
+            let surface = pipe(
+                "decal surface colour",
+                "vs_surface",
+                "fs_surface",
+                tri,
+                depth_state(false, wgpu::CompareFunction::Greater, SURFACE_BIAS),
+                &t_on,
+            );
+            // The points write their depth (nudged a hair nearer than their
+            // surface), so that a surface drawn later erases a vertex's id
+            // only where it is in front of the vertex, not where it merely
+            // meets it along an edge.
+            let points = pipe(
+                "decal points",
+                "vs_point",
+                "fs_point",
+                pts,
+                depth_state(
+                    true,
+                    wgpu::CompareFunction::GreaterEqual,
+                    Default::default(),
+                ),
+                &t_on,
+            );
+            let depth = pipe(
+                "decal surface depth",
+                "vs_surface",
+                "fs_surface",
+                tri,
+                depth_state(true, wgpu::CompareFunction::Greater, SURFACE_BIAS),
+                &t_off,
+            );
+            let id_tex = tex(
+                "hemicube ids",
+                ID_FORMAT,
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            );
+            let id_view = id_tex.create_view(&Default::default());
+            Some(DecalPipes {
+                surface,
+                points,
+                depth,
+                id_tex,
+                id_view,
+            })
+        } else {
+            None
+        };
         g.check()?;
         Ok(Hemicube {
             gpu: Mutex::new(Gpus {
                 g,
                 vbuf,
                 ibuf,
-                n_indices: idx.len() as u32,
+                n_indices,
+                surface_ranges,
                 shot_buf,
-                face_buf,
+                _face_buf: face_buf,
                 bind0,
                 bgl1,
                 depth_pipeline,
+                id_pipeline,
                 test_pipeline,
-                depth_tex,
+                _surface_ids: surface_ids,
+                surface_ids_view,
+                normal_buf,
+                _depth_tex: depth_tex,
                 depth_view,
+                points,
+                decal,
             }),
             ray: RayVisibility::new(mesh),
             origin,
@@ -376,8 +672,13 @@ impl Hemicube {
         self.gpu.lock().map(|g| g.g.describe()).unwrap_or_default()
     }
 
+    /// The method in use.
+    pub fn method(&self) -> Method {
+        self.opts.method
+    }
+
     /// The five faces for a shooter point with normal n.
-    fn shot_uniform(&self, from: DVec3, n: DVec3, count: usize) -> ShotU {
+    fn shot_uniform(&self, from: DVec3, n: DVec3, shooter: SurfaceId, count: usize) -> ShotU {
         let n = n.normalize();
         let a = if n.x.abs() < 0.6 { DVec3::X } else { DVec3::Y };
         let u = (a - n * a.dot(n)).normalize();
@@ -409,16 +710,73 @@ impl Hemicube {
                 .as_vec3()
                 .extend(self.near as f32)
                 .to_array(),
-            params: [count as f32, self.opts.depth_tolerance, 0.0, 0.0],
+            params: [
+                count as f32,
+                self.opts.depth_tolerance,
+                UNCERTAIN,
+                f32::from_bits(shooter.0),
+            ],
         }
     }
 
-    /// Flags per candidate: 0 hidden, 1 visible, 2 questionable.
-    fn gpu_flags(&self, from: DVec3, n: DVec3, rel: &[[f32; 4]]) -> Result<Vec<u32>, GpuError> {
-        let s = self
-            .gpu
-            .lock()
-            .map_err(|_| GpuError("hemi-cube state poisoned".into()))?;
+    /// Records the depth-only pass of all patches into the atlas.
+    fn depth_pass(s: &Gpus, enc: &mut wgpu::CommandEncoder, uni: &ShotU) {
+        let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("hemicube depth"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &s.depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(0.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        });
+        rp.set_pipeline(&s.depth_pipeline);
+        rp.set_vertex_buffer(0, s.vbuf.slice(..));
+        rp.set_index_buffer(s.ibuf.slice(..), wgpu::IndexFormat::Uint32);
+        for (k, f) in uni.faces.iter().enumerate() {
+            set_face(&mut rp, f, &s.bind0, k);
+            rp.draw_indexed(0..s.n_indices, 0, 0..1);
+        }
+    }
+
+    /// Records the surface-id pass (depth and ids, no bias) into the atlas.
+    fn id_pass(s: &Gpus, enc: &mut wgpu::CommandEncoder, uni: &ShotU) {
+        let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("hemicube surface ids"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &s.surface_ids_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &s.depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(0.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        });
+        rp.set_pipeline(&s.id_pipeline);
+        rp.set_vertex_buffer(0, s.vbuf.slice(..));
+        rp.set_index_buffer(s.ibuf.slice(..), wgpu::IndexFormat::Uint32);
+        for (k, f) in uni.faces.iter().enumerate() {
+            set_face(&mut rp, f, &s.bind0, k);
+            rp.draw_indexed(0..s.n_indices, 0, 0..1);
+        }
+    }
+
+    /// Depth method: per candidate, bit 0 = visible at its pixel, bit 1 = questionable.
+    fn depth_flags(&self, s: &Gpus, sh: &Shooter, rel: &[[f32; 4]]) -> Result<Vec<u32>, GpuError> {
         let g = &s.g;
         let mut out = Vec::with_capacity(rel.len());
         // Chunks keep each dispatch within the 65535 × 65535 workgroup grid
@@ -426,7 +784,7 @@ impl Hemicube {
         let chunk = (g.limits.max_storage_buffer_binding_size as usize / 16).clamp(1, 1 << 22);
         let mut first = true;
         for part in rel.chunks(chunk) {
-            let uni = self.shot_uniform(from, n, part.len());
+            let uni = self.shot_uniform(sh.from, sh.n, sh.surface, part.len());
             g.queue
                 .write_buffer(&s.shot_buf, 0, bytemuck::bytes_of(&uni));
             let cand = g.buffer_init(
@@ -457,33 +815,19 @@ impl Hemicube {
                         binding: 2,
                         resource: flags.as_entire_binding(),
                     },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: wgpu::BindingResource::TextureView(&s.surface_ids_view),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 4,
+                        resource: s.normal_buf.as_entire_binding(),
+                    },
                 ],
             });
             let mut enc = g.device.create_command_encoder(&Default::default());
             if first {
-                let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("hemicube depth"),
-                    color_attachments: &[],
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &s.depth_view,
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(0.0),
-                            store: wgpu::StoreOp::Store,
-                        }),
-                        stencil_ops: None,
-                    }),
-                    ..Default::default()
-                });
-                rp.set_pipeline(&s.depth_pipeline);
-                rp.set_vertex_buffer(0, s.vbuf.slice(..));
-                rp.set_index_buffer(s.ibuf.slice(..), wgpu::IndexFormat::Uint32);
-                for (k, f) in uni.faces.iter().enumerate() {
-                    let [x, y, w, h] = f.viewport;
-                    rp.set_viewport(x, y, w, h, 0.0, 1.0);
-                    rp.set_scissor_rect(x as u32, y as u32, w as u32, h as u32);
-                    rp.set_bind_group(0, &s.bind0, &[(k as u64 * FACE_STRIDE) as u32]);
-                    rp.draw_indexed(0..s.n_indices, 0, 0..1);
-                }
+                Self::id_pass(s, &mut enc, &uni);
                 first = false;
             }
             {
@@ -503,10 +847,309 @@ impl Hemicube {
                     .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
             );
         }
-        let _ = &s.face_buf;
-        let _ = &s.depth_tex;
         Ok(out)
     }
+
+    /// Points method: whether each candidate's point survived the depth test.
+    fn points_seen(&self, s: &Gpus, sh: &Shooter, rel: &[[f32; 4]]) -> Result<Vec<bool>, GpuError> {
+        let g = &s.g;
+        let pp = s
+            .points
+            .as_ref()
+            .ok_or_else(|| GpuError("points pipeline missing".into()))?;
+        let uni = self.shot_uniform(sh.from, sh.n, sh.surface, rel.len());
+        g.queue
+            .write_buffer(&s.shot_buf, 0, bytemuck::bytes_of(&uni));
+        let pbuf = g.buffer_init(
+            "points",
+            bytemuck::cast_slice(rel),
+            wgpu::BufferUsages::VERTEX,
+        );
+        let size = (rel.len() * 4).max(4) as u64;
+        let seen = g.buffer_init(
+            "seen",
+            &vec![0u8; size as usize],
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        );
+        let bind = g.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("hemicube points"),
+            layout: &pp.bgl,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: seen.as_entire_binding(),
+            }],
+        });
+        let mut enc = g.device.create_command_encoder(&Default::default());
+        Self::depth_pass(s, &mut enc, &uni);
+        {
+            let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("hemicube points"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &s.depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                ..Default::default()
+            });
+            rp.set_pipeline(&pp.pipeline);
+            rp.set_bind_group(1, &bind, &[]);
+            rp.set_vertex_buffer(0, pbuf.slice(..));
+            for (k, f) in uni.faces.iter().enumerate() {
+                set_face(&mut rp, f, &s.bind0, k);
+                rp.draw(0..rel.len() as u32, 0..1);
+            }
+        }
+        g.queue.submit([enc.finish()]);
+        let bytes = g.read_buffer(&seen, size)?;
+        Ok(bytes
+            .chunks_exact(4)
+            .take(rel.len())
+            .map(|b| b[0] != 0)
+            .collect())
+    }
+
+    /// Decal method: ids left in the id image, redrawn with the vertices not
+    /// yet seen until a pass finds no new one (at most 32 passes).
+    fn decal_seen(
+        &self,
+        s: &Gpus,
+        mesh: &Mesh,
+        sh: &Shooter,
+        candidates: &[VertId],
+        rel: &[[f32; 4]],
+    ) -> Result<Vec<bool>, GpuError> {
+        let g = &s.g;
+        let dp = s
+            .decal
+            .as_ref()
+            .ok_or_else(|| GpuError("decal pipelines missing".into()))?;
+        let uni = self.shot_uniform(sh.from, sh.n, sh.surface, rel.len());
+        g.queue
+            .write_buffer(&s.shot_buf, 0, bytemuck::bytes_of(&uni));
+        let mut seen = vec![false; rel.len()];
+        let mut remaining: Vec<usize> = (0..rel.len()).collect();
+        for _pass in 0..32 {
+            if remaining.is_empty() {
+                break;
+            }
+            // The remaining candidates grouped by surface (surface ids are
+            // dense and the ranges are in surface order).
+            remaining.sort_by_key(|&i| (mesh.vertex_surface(candidates[i]).0, i));
+            let pts: Vec<[f32; 4]> = remaining.iter().map(|&i| rel[i]).collect();
+            let mut prange = vec![(0u32, 0u32); s.surface_ranges.len()];
+            for (k, &i) in remaining.iter().enumerate() {
+                let sid = mesh.vertex_surface(candidates[i]).0 as usize;
+                if sid < prange.len() {
+                    if prange[sid].1 == 0 {
+                        prange[sid].0 = k as u32;
+                    }
+                    prange[sid].1 += 1;
+                }
+            }
+            let pbuf = g.buffer_init(
+                "decal points",
+                bytemuck::cast_slice(&pts),
+                wgpu::BufferUsages::VERTEX,
+            );
+            let mut enc = g.device.create_command_encoder(&Default::default());
+            {
+                let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("hemicube decal"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &dp.id_view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &s.depth_view,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(0.0),
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    ..Default::default()
+                });
+                rp.set_index_buffer(s.ibuf.slice(..), wgpu::IndexFormat::Uint32);
+                for (k, f) in uni.faces.iter().enumerate() {
+                    set_face(&mut rp, f, &s.bind0, k);
+                    for (sid, &(start, count)) in s.surface_ranges.iter().enumerate() {
+                        let (pstart, pcount) = prange[sid];
+                        if count > 0 {
+                            rp.set_vertex_buffer(0, s.vbuf.slice(..));
+                            rp.set_pipeline(&dp.surface);
+                            rp.draw_indexed(start..start + count, 0, 0..1);
+                        }
+                        if pcount > 0 {
+                            rp.set_vertex_buffer(0, pbuf.slice(..));
+                            rp.set_pipeline(&dp.points);
+                            rp.draw(pstart..pstart + pcount, 0..1);
+                        }
+                        if count > 0 {
+                            rp.set_vertex_buffer(0, s.vbuf.slice(..));
+                            rp.set_pipeline(&dp.depth);
+                            rp.draw_indexed(start..start + count, 0, 0..1);
+                        }
+                    }
+                }
+            }
+            g.queue.submit([enc.finish()]);
+            let ids = g.read_texture(&dp.id_tex, 4)?;
+            let mut new = 0;
+            for b in ids.chunks_exact(4) {
+                let id = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+                if id > 0 {
+                    let i = (id - 1) as usize;
+                    if i < seen.len() && !seen[i] {
+                        seen[i] = true;
+                        new += 1;
+                    }
+                }
+            }
+            remaining.retain(|&i| !seen[i]);
+            if new == 0 {
+                break;
+            }
+        }
+        Ok(seen)
+    }
+
+    /// The hemi-cube's answer for each candidate and which of them are
+    /// questionable, before any ray casting.
+    pub fn classify(
+        &self,
+        mesh: &Mesh,
+        from: DVec3,
+        shooter: SurfaceId,
+        candidates: &[VertId],
+    ) -> Result<Classified, GpuError> {
+        if candidates.is_empty() {
+            return Ok(Classified::default());
+        }
+        let n = mesh.surface_normal(shooter).normalize();
+        let sh = Shooter {
+            from,
+            n,
+            surface: shooter,
+        };
+        // Relative positions, and each candidate's index in w (as bits).
+        let rel: Vec<[f32; 4]> = candidates
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| {
+                let d = (mesh.vertex_pos(v) - from).as_vec3();
+                [d.x, d.y, d.z, f32::from_bits(i as u32)]
+            })
+            .collect();
+        // For the depth test: w = the vertex's surface id.
+        let rel_s: Vec<[f32; 4]> = candidates
+            .iter()
+            .zip(&rel)
+            .map(|(&v, r)| [r[0], r[1], r[2], f32::from_bits(mesh.vertex_surface(v).0)])
+            .collect();
+        let s = self
+            .gpu
+            .lock()
+            .map_err(|_| GpuError("hemi-cube state poisoned".into()))?;
+        match self.opts.method {
+            Method::Depth => {
+                let f = self.depth_flags(&s, &sh, &rel_s)?;
+                Ok(Classified {
+                    raw: f.iter().map(|x| x & 1 != 0).collect(),
+                    questionable: f.iter().map(|x| x & 2 != 0).collect(),
+                })
+            }
+            Method::Points | Method::Decal => {
+                let raw = if self.opts.method == Method::Points {
+                    self.points_seen(&s, &sh, &rel)?
+                } else {
+                    self.decal_seen(&s, mesh, &sh, candidates, &rel)?
+                };
+                // Questionable: the depth test's neighbourhood disagrees (a
+                // shadow edge, a face border or the horizon within a pixel),
+                // or a mixed element spans less than a few pixels.
+                let f = self.depth_flags(&s, &sh, &rel_s)?;
+                drop(s);
+                let mut questionable =
+                    self.questionable_by_elements(mesh, from, n, candidates, &raw);
+                for (q, x) in questionable.iter_mut().zip(&f) {
+                    *q |= x & 2 != 0;
+                }
+                Ok(Classified { raw, questionable })
+            }
+        }
+    }
+
+    /// §4.5: the vertices of every element that has visible and hidden
+    /// vertices and spans less than a few hemi-cube pixels, and vertices
+    /// within a pixel and a half of the horizon, are questionable.
+    fn questionable_by_elements(
+        &self,
+        mesh: &Mesh,
+        from: DVec3,
+        n: DVec3,
+        candidates: &[VertId],
+        raw: &[bool],
+    ) -> Vec<bool> {
+        let pixel = 2.0 / f64::from(self.opts.res);
+        let mut q: Vec<bool> = candidates
+            .iter()
+            .map(|&v| {
+                let d = mesh.vertex_pos(v) - from;
+                d.dot(n) < 1.5 * pixel * d.length()
+            })
+            .collect();
+        let mut index = vec![u32::MAX; mesh.num_vertices()];
+        for (i, &v) in candidates.iter().enumerate() {
+            index[v.idx()] = i as u32;
+        }
+        for e in mesh.leaves() {
+            let c = mesh.elem_corners(e);
+            let mut vis = 0;
+            let mut hid = 0;
+            for &v in c {
+                match index[v.idx()] {
+                    u32::MAX => {}
+                    i if raw[i as usize] => vis += 1,
+                    _ => hid += 1,
+                }
+            }
+            if vis > 0 && hid > 0 {
+                let dist = (mesh.elem_centroid(e) - from).length().max(1e-300);
+                if mesh.elem_longest_edge(e) / dist < 3.0 * pixel {
+                    for &v in c {
+                        if index[v.idx()] != u32::MAX {
+                            q[index[v.idx()] as usize] = true;
+                        }
+                    }
+                }
+            }
+        }
+        q
+    }
+}
+
+/// A shooter point, its surface's normal and the surface.
+struct Shooter {
+    from: DVec3,
+    n: DVec3,
+    surface: SurfaceId,
+}
+
+/// Sets the viewport, scissor and face uniform for face k.
+fn set_face(rp: &mut wgpu::RenderPass<'_>, f: &FaceU, bind0: &wgpu::BindGroup, k: usize) {
+    let [x, y, w, h] = f.viewport;
+    rp.set_viewport(x, y, w, h, 0.0, 1.0);
+    rp.set_scissor_rect(x as u32, y as u32, w as u32, h as u32);
+    rp.set_bind_group(0, bind0, &[(k as u64 * FACE_STRIDE) as u32]);
 }
 
 impl Visibility for Hemicube {
@@ -523,13 +1166,8 @@ impl Visibility for Hemicube {
         if candidates.is_empty() {
             return Vec::new();
         }
-        let n = mesh.surface_normal(shooter);
-        let rel: Vec<[f32; 4]> = candidates
-            .iter()
-            .map(|&v| (mesh.vertex_pos(v) - from).as_vec3().extend(0.0).to_array())
-            .collect();
-        let flags = match self.gpu_flags(from, n, &rel) {
-            Ok(f) => f,
+        let c = match self.classify(mesh, from, shooter, candidates) {
+            Ok(c) => c,
             Err(e) => {
                 self.fallbacks.fetch_add(1, Ordering::Relaxed);
                 if let Ok(mut le) = self.last_error.lock() {
@@ -541,20 +1179,17 @@ impl Visibility for Hemicube {
         // Ray cast the questionable vertices (§4.5).
         let q: Vec<VertId> = candidates
             .iter()
-            .zip(&flags)
-            .filter(|(_, f)| **f == 2)
+            .zip(&c.questionable)
+            .filter(|(_, q)| **q)
             .map(|(v, _)| *v)
             .collect();
         self.questionable
             .fetch_add(q.len() as u64, Ordering::Relaxed);
         let mut rq = self.ray.visible(mesh, from, shooter, &q).into_iter();
-        flags
+        c.raw
             .iter()
-            .map(|&f| match f {
-                0 => false,
-                1 => true,
-                _ => rq.next().unwrap_or(false),
-            })
+            .zip(&c.questionable)
+            .map(|(&r, &q)| if q { rq.next().unwrap_or(r) } else { r })
             .collect()
     }
 
