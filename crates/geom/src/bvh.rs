@@ -242,13 +242,24 @@ fn centroid(t: &Triangle) -> DVec3 {
     (t.p[0] + t.p[1] + t.p[2]) / 3.0
 }
 
+/// Whether the ray `o + t d` (`inv` = 1/d per component) meets the closed
+/// box [lo, hi] for some t in [tmin, tmax].
 #[inline]
-fn slab(lo: DVec3, hi: DVec3, o: DVec3, inv: DVec3, tmin: f64, tmax: f64) -> bool {
-    let t0 = (lo - o) * inv;
-    let t1 = (hi - o) * inv;
-    // NaN (0 · inf) comparisons fall out as "no constraint" through min/max.
-    let tn = t0.min(t1).max_element().max(tmin);
-    let tf = t0.max(t1).min_element().min(tmax);
+pub fn slab(lo: DVec3, hi: DVec3, o: DVec3, inv: DVec3, tmin: f64, tmax: f64) -> bool {
+    let (mut tn, mut tf) = (tmin, tmax);
+    for k in 0..3 {
+        let a = (lo[k] - o[k]) * inv[k];
+        let b = (hi[k] - o[k]) * inv[k];
+        // NaN is 0 · ∞: the ray is parallel to this slab and starts on one of
+        // its faces, so it stays inside the (closed) slab: no constraint.
+        // (Through `f64::min`, which ignores NaN, such a ray used to be
+        // rejected, and could miss a box it lies in.)
+        if a.is_nan() || b.is_nan() {
+            continue;
+        }
+        tn = tn.max(a.min(b));
+        tf = tf.min(a.max(b));
+    }
     tn <= tf
 }
 
@@ -381,5 +392,44 @@ mod tests {
         ];
         let t = face_triangles(&[outer, hole]);
         assert_eq!(t.len(), 8);
+    }
+}
+
+#[cfg(test)]
+mod slab_tests {
+    use super::*;
+
+    #[test]
+    fn a_ray_in_the_plane_of_a_box_face_enters_the_box() {
+        let (lo, hi) = (DVec3::ZERO, DVec3::ONE);
+        // Along +x in the plane z = 0 (the box's lower z face), from outside.
+        let o = DVec3::new(-1.0, 0.5, 0.0);
+        let d = DVec3::X;
+        assert!(slab(lo, hi, o, d.recip(), 0.0, 10.0));
+        // In the plane z = 1 (upper face) too, and not when beside the box.
+        assert!(slab(
+            lo,
+            hi,
+            DVec3::new(-1.0, 0.5, 1.0),
+            d.recip(),
+            0.0,
+            10.0
+        ));
+        assert!(!slab(
+            lo,
+            hi,
+            DVec3::new(-1.0, 0.5, 1.5),
+            d.recip(),
+            0.0,
+            10.0
+        ));
+        assert!(!slab(
+            lo,
+            hi,
+            DVec3::new(-1.0, 0.5, 0.5),
+            d.recip(),
+            0.0,
+            0.5
+        ));
     }
 }

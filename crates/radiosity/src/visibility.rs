@@ -1,7 +1,7 @@
 //! Which vertices a shooter sees: the [`Visibility`] trait and its CPU
 //! ray-cast implementation (the reference, and the fallback without a GPU).
 
-use geom::bvh::{Triangle, ray_triangle};
+use geom::bvh::{Triangle, ray_triangle, slab};
 use glam::DVec3;
 use libmesh::{Mesh, SurfaceId, VertId};
 use rayon::prelude::*;
@@ -221,16 +221,6 @@ fn build(pts: &[DVec3], tris: &mut [Tri]) -> Vec<Node> {
         stack.push((left + 1, mid, e));
     }
     nodes
-}
-
-#[inline]
-fn slab(lo: DVec3, hi: DVec3, o: DVec3, inv: DVec3, tmin: f64, tmax: f64) -> bool {
-    let t0 = (lo - o) * inv;
-    let t1 = (hi - o) * inv;
-    // NaN (0 · inf) comparisons fall out as "no constraint" through min/max.
-    let tn = t0.min(t1).max_element().max(tmin);
-    let tf = t0.max(t1).min_element().min(tmax);
-    tn <= tf
 }
 
 impl Visibility for RayVisibility {
