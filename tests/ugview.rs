@@ -47,15 +47,51 @@ fn assert_image_golden(rel: &str, png: &[u8]) {
     let mean = sum as f64 / (3.0 * n);
     let share = outliers as f64 / n;
     if mean > MEAN_TOLERANCE || share > OUTLIER_SHARE {
-        let dump = std::env::temp_dir().join(Path::new(rel).file_name().unwrap());
+        // The actual picture and a difference picture (per channel, ×4) for review.
+        let name = Path::new(rel).file_stem().unwrap().to_string_lossy().into_owned();
+        let dump = std::env::temp_dir().join(format!("{name}.actual.png"));
         let _ = std::fs::write(&dump, png);
+        let diff = image::RgbImage::from_fn(want.width(), want.height(), |x, y| {
+            let (a, b) = (want.get_pixel(x, y), got.get_pixel(x, y));
+            image::Rgb([0, 1, 2].map(|k| a[k].abs_diff(b[k]).saturating_mul(4)))
+        });
+        let diff_path = std::env::temp_dir().join(format!("{name}.diff.png"));
+        let _ = diff.save(&diff_path);
         panic!(
-            "{rel}: mean difference {mean:.3} (≤ {MEAN_TOLERANCE}), outliers {:.3}% (≤ {}%); actual picture written to {}",
+            "{rel}: mean difference {mean:.3} (≤ {MEAN_TOLERANCE}), outliers {:.3}% (≤ {}%); actual picture written to {}, difference ×4 to {}",
             share * 100.0,
             OUTLIER_SHARE * 100.0,
-            dump.display()
+            dump.display(),
+            diff_path.display()
         );
     }
+}
+
+#[test]
+fn golden_comparison_fails_on_a_different_picture_and_writes_a_diff() {
+    // The tolerance must not accept everything: a picture with a bright
+    // square where the golden one has none fails, and the diff is written.
+    let Some(golden) = image::open(root().join("fixtures/view/cornell-unlit.png")).ok() else {
+        panic!("fixtures/view/cornell-unlit.png missing");
+    };
+    let mut img = golden.to_rgb8();
+    for y in 100..140 {
+        for x in 100..140 {
+            img.put_pixel(x, y, image::Rgb([255, 0, 255]));
+        }
+    }
+    let mut png = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut png, image::ImageFormat::Png).unwrap();
+    if std::env::var_os("UPDATE_GOLDEN").is_some() {
+        return;
+    }
+    let r = std::panic::catch_unwind(|| assert_image_golden("fixtures/view/cornell-unlit.png", png.get_ref()));
+    let msg = match r {
+        Ok(()) => panic!("a 40 × 40 magenta square passed the comparison"),
+        Err(e) => e.downcast_ref::<String>().cloned().unwrap_or_default(),
+    };
+    assert!(msg.contains("difference ×4 to"), "{msg}");
+    assert!(std::env::temp_dir().join("cornell-unlit.diff.png").exists());
 }
 
 #[test]
@@ -108,6 +144,11 @@ fn dirty_cornell_box_through_the_whole_chain_to_a_picture() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert_image_golden("fixtures/view/cornell-lit.png", &out.stdout);
+    // With the element mesh over it (the report's colour plate 2b).
+    let mesh = run("ugview", &["--size", "240x240", "--mesh"], Some(&model));
+    assert!(mesh.status.success());
+    assert_image_golden("fixtures/view/cornell-lit-mesh.png", &mesh.stdout);
+    assert_ne!(mesh.stdout, out.stdout);
     // The light (ceiling centre, top of the picture) is the brightest thing in it.
     let img = image::load_from_memory(&out.stdout).unwrap().to_rgb8();
     let lum = |p: &image::Rgb<u8>| {

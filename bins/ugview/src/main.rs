@@ -133,7 +133,9 @@ fn main() -> std::process::ExitCode {
             }
             None => None,
         };
+        let t0 = std::time::Instant::now();
         let model = c.load_flat()?;
+        let t_load = t0.elapsed();
         let o = ugview::ViewOptions {
             width: args.size.0,
             height: args.size.1,
@@ -159,6 +161,8 @@ fn main() -> std::process::ExitCode {
         // Usage errors (camera names, …) before the GPU is needed.
         let plan =
             ugview::plan(&model, &o).map_err(|m| cli::Failure::input(format!("error: {m}")))?;
+        drop(model);
+        let t_plan = t0.elapsed();
         let backend = match args.gpu_backend {
             BackendArg::Auto => gpu::Backend::Auto,
             BackendArg::Vulkan => gpu::Backend::Vulkan,
@@ -170,8 +174,10 @@ fn main() -> std::process::ExitCode {
         })
         .map_err(|e| cli::Failure::runtime(format!("error: {e}")))?;
         c.verbose(format!("device: {}", g.describe()));
+        let t_device = t0.elapsed();
         let pic =
             ugview::draw(&g, plan, &o).map_err(|e| cli::Failure::runtime(format!("error: {e}")))?;
+        let t_draw = t0.elapsed();
         for n in &pic.notes {
             if n.starts_with("warning:") && !c.quiet {
                 eprintln!("{n}");
@@ -182,6 +188,15 @@ fn main() -> std::process::ExitCode {
         let png = pic
             .png()
             .map_err(|e| cli::Failure::runtime(format!("error: {e}")))?;
+        let t_png = t0.elapsed();
+        c.verbose(format!(
+            "times: read {:.3} s, scene and camera {:.3} s, device {:.3} s, render and tone map {:.3} s, PNG {:.3} s",
+            t_load.as_secs_f64(),
+            (t_plan - t_load).as_secs_f64(),
+            (t_device - t_plan).as_secs_f64(),
+            (t_draw - t_device).as_secs_f64(),
+            (t_png - t_draw).as_secs_f64()
+        ));
         c.write(&png)
     })
 }
