@@ -242,22 +242,8 @@ pub fn render(g: &Gpu, scene: &Scene, cam: &Camera, o: &RenderOptions) -> Result
     });
     g.check()?;
 
-    let tex = |label: &str, format, samples, usage| {
-        dev.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: samples,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage,
-            view_formats: &[],
-        })
-    };
+    let tex =
+        |label: &str, format, samples, usage| g.texture_2d(label, (w, h), format, samples, usage);
     let ra = wgpu::TextureUsages::RENDER_ATTACHMENT;
     let out_usage = ra | wgpu::TextureUsages::COPY_SRC;
     let hdr_out = tex("hdr", HDR_FORMAT, 1, out_usage);
@@ -293,13 +279,6 @@ pub fn render(g: &Gpu, scene: &Scene, cam: &Camera, o: &RenderOptions) -> Result
     );
     g.check()?;
 
-    let attach = |ms: &Option<wgpu::TextureView>, single: &wgpu::TextureView, clear: bool| {
-        let (view, resolve) = match ms {
-            Some(m) => (m.clone(), Some(single.clone())),
-            None => (single.clone(), None),
-        };
-        (view, resolve, clear)
-    };
     let mut enc = dev.create_command_encoder(&Default::default());
     for pass in 0..2 {
         if pass == 1 && (!o.mesh || scene.lines.is_empty()) {
@@ -308,23 +287,25 @@ pub fn render(g: &Gpu, scene: &Scene, cam: &Camera, o: &RenderOptions) -> Result
         // Pass 0 draws surfaces; pass 1 adds lines, keeping colour and depth.
         let first = pass == 0;
         let last = pass == 1 || !o.mesh || scene.lines.is_empty();
-        let a = attach(&hdr_ms_v, &hdr_v, first);
-        let b = attach(&ov_ms_v, &ov_v, first);
+        // Multisampled targets resolve into the single-sample ones on the last pass.
+        let target = |ms: &Option<wgpu::TextureView>, single: &wgpu::TextureView| {
+            (
+                ms.clone().unwrap_or_else(|| single.clone()),
+                ms.as_ref().map(|_| single.clone()),
+            )
+        };
+        let (a, a_res) = target(&hdr_ms_v, &hdr_v);
+        let (b, b_res) = target(&ov_ms_v, &ov_v);
+        let clear = first.then_some(wgpu::Color::TRANSPARENT);
+        let resolve = |r: &Option<wgpu::TextureView>| if last { r.clone() } else { None };
+        let (a_res, b_res) = (resolve(&a_res), resolve(&b_res));
         let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(if first { "surfaces" } else { "lines" }),
-            color_attachments: &[color(&a, last), color(&b, last)],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth_v,
-                depth_ops: Some(wgpu::Operations {
-                    load: if first {
-                        wgpu::LoadOp::Clear(1.0)
-                    } else {
-                        wgpu::LoadOp::Load
-                    },
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
+            color_attachments: &[
+                gpu::color_target(&a, a_res.as_ref(), clear),
+                gpu::color_target(&b, b_res.as_ref(), clear),
+            ],
+            depth_stencil_attachment: gpu::depth_target(&depth_v, first.then_some(1.0)),
             ..Default::default()
         });
         rp.set_bind_group(0, &bind, &[]);
@@ -363,26 +344,6 @@ pub fn render(g: &Gpu, scene: &Scene, cam: &Camera, o: &RenderOptions) -> Result
         rgb,
         coverage,
         overlay,
-    })
-}
-
-type Attachment = (wgpu::TextureView, Option<wgpu::TextureView>, bool);
-
-/// A colour attachment: (view, resolve target, clear); resolved on the last pass.
-fn color(t: &Attachment, last: bool) -> Option<wgpu::RenderPassColorAttachment<'_>> {
-    let (view, resolve, clear) = t;
-    Some(wgpu::RenderPassColorAttachment {
-        view,
-        depth_slice: None,
-        resolve_target: if last { resolve.as_ref() } else { None },
-        ops: wgpu::Operations {
-            load: if *clear {
-                wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)
-            } else {
-                wgpu::LoadOp::Load
-            },
-            store: wgpu::StoreOp::Store,
-        },
     })
 }
 

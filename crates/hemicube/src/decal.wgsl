@@ -6,48 +6,13 @@
 // is read back; vertices that shared a pixel with another are found by
 // drawing again with only the vertices not yet seen (§4.4).
 
-struct Face {
-    right: vec4<f32>,
-    up: vec4<f32>,
-    fwd: vec4<f32>,
-    window: vec4<f32>,
-    viewport: vec4<f32>,
-};
-
-struct Shot {
-    faces: array<Face, 5>,
-    origin: vec4<f32>,
-    params: vec4<f32>,
-};
-
-struct FaceIndex {
-    index: u32,
-};
-
-@group(0) @binding(0) var<uniform> shot: Shot;
-@group(0) @binding(1) var<uniform> face_index: FaceIndex;
-
-fn clip_of(p: vec3<f32>, depth_scale: f32) -> vec4<f32> {
-    let face = shot.faces[face_index.index];
-    let x = dot(p, face.right.xyz);
-    let y = dot(p, face.up.xyz);
-    let z = dot(p, face.fwd.xyz);
-    let w = face.window;
-    return vec4<f32>(
-        (2.0 * x - (w.x + w.y) * z) / (w.y - w.x),
-        (2.0 * y - (w.z + w.w) * z) / (w.w - w.z),
-        shot.origin.w * depth_scale,
-        z
-    );
-}
-
 // pos.w: the patch's surface id (bits); the shooter's own surface is not drawn.
 @vertex
 fn vs_surface(@location(0) pos: vec4<f32>) -> @builtin(position) vec4<f32> {
     if bitcast<u32>(pos.w) == bitcast<u32>(shot.params.w) {
         return vec4<f32>(2.0, 2.0, 0.5, 1.0);
     }
-    return clip_of(pos.xyz - shot.origin.xyz, 1.0);
+    return clip_of(shot.faces[face_index.index], pos.xyz - shot.origin.xyz, shot.origin.w);
 }
 
 @fragment
@@ -64,7 +29,7 @@ struct PointOut {
 @vertex
 fn vs_point(@location(0) rel: vec4<f32>) -> PointOut {
     var o: PointOut;
-    o.clip = clip_of(rel.xyz, 1.0 + shot.params.y);
+    o.clip = clip_of(shot.faces[face_index.index], rel.xyz, shot.origin.w * (1.0 + shot.params.y));
     o.id = bitcast<u32>(rel.w);
     return o;
 }

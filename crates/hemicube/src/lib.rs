@@ -25,7 +25,7 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// The WGSL source.
-pub const SHADER: &str = include_str!("hemicube.wgsl");
+pub const SHADER: &str = concat!(include_str!("common.wgsl"), include_str!("hemicube.wgsl"));
 
 /// How visible vertices are found on the hemi-cube.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -75,9 +75,9 @@ pub struct Classified {
 pub const POINTS_FEATURE: wgpu::Features = wgpu::Features::SHADER_EARLY_DEPTH_TEST;
 
 /// Source of the points method's shader.
-pub const POINTS_SHADER: &str = include_str!("points.wgsl");
+pub const POINTS_SHADER: &str = concat!(include_str!("common.wgsl"), include_str!("points.wgsl"));
 /// Source of the decal method's shader.
-pub const DECAL_SHADER: &str = include_str!("decal.wgsl");
+pub const DECAL_SHADER: &str = concat!(include_str!("common.wgsl"), include_str!("decal.wgsl"));
 
 /// Hemi-cube settings.
 #[derive(Clone, Copy, Debug)]
@@ -463,22 +463,7 @@ impl Hemicube {
             compilation_options: Default::default(),
             cache: None,
         });
-        let tex = |label, format, usage| {
-            dev.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width: w,
-                    height: h,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats: &[],
-            })
-        };
+        let tex = |label, format, usage| g.texture_2d(label, (w, h), format, 1, usage);
         let depth_tex = tex(
             "hemicube depth",
             DEPTH_FORMAT,
@@ -723,15 +708,7 @@ impl Hemicube {
     fn depth_pass(s: &Gpus, enc: &mut wgpu::CommandEncoder, uni: &ShotU) {
         let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("hemicube depth"),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &s.depth_view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(0.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
+            depth_stencil_attachment: gpu::depth_target(&s.depth_view, Some(0.0)),
             ..Default::default()
         });
         rp.set_pipeline(&s.depth_pipeline);
@@ -747,23 +724,12 @@ impl Hemicube {
     fn id_pass(s: &Gpus, enc: &mut wgpu::CommandEncoder, uni: &ShotU) {
         let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("hemicube surface ids"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &s.surface_ids_view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &s.depth_view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(0.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
+            color_attachments: &[gpu::color_target(
+                &s.surface_ids_view,
+                None,
+                Some(wgpu::Color::TRANSPARENT),
+            )],
+            depth_stencil_attachment: gpu::depth_target(&s.depth_view, Some(0.0)),
             ..Default::default()
         });
         rp.set_pipeline(&s.id_pipeline);
@@ -884,15 +850,7 @@ impl Hemicube {
         {
             let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("hemicube points"),
-                color_attachments: &[],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &s.depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
+                depth_stencil_attachment: gpu::depth_target(&s.depth_view, None),
                 ..Default::default()
             });
             rp.set_pipeline(&pp.pipeline);
@@ -959,23 +917,12 @@ impl Hemicube {
             {
                 let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("hemicube decal"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: &dp.id_view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &s.depth_view,
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(0.0),
-                            store: wgpu::StoreOp::Store,
-                        }),
-                        stencil_ops: None,
-                    }),
+                    color_attachments: &[gpu::color_target(
+                        &dp.id_view,
+                        None,
+                        Some(wgpu::Color::TRANSPARENT),
+                    )],
+                    depth_stencil_attachment: gpu::depth_target(&s.depth_view, Some(0.0)),
                     ..Default::default()
                 });
                 rp.set_index_buffer(s.ibuf.slice(..), wgpu::IndexFormat::Uint32);

@@ -5,26 +5,6 @@
 // @early_depth_test(force): otherwise the fragment shader runs (and writes)
 // before the depth test rejects occluded points.
 
-struct Face {
-    right: vec4<f32>,
-    up: vec4<f32>,
-    fwd: vec4<f32>,
-    window: vec4<f32>,
-    viewport: vec4<f32>,
-};
-
-struct Shot {
-    faces: array<Face, 5>,
-    origin: vec4<f32>,
-    params: vec4<f32>,
-};
-
-struct FaceIndex {
-    index: u32,
-};
-
-@group(0) @binding(0) var<uniform> shot: Shot;
-@group(0) @binding(1) var<uniform> face_index: FaceIndex;
 @group(1) @binding(0) var<storage, read_write> seen: array<u32>;
 
 struct PointOut {
@@ -35,20 +15,9 @@ struct PointOut {
 // xyz: the vertex relative to the shooter point; w: its index (as bits).
 @vertex
 fn vs_point(@location(0) rel: vec4<f32>) -> PointOut {
-    let face = shot.faces[face_index.index];
-    let p = rel.xyz;
-    let x = dot(p, face.right.xyz);
-    let y = dot(p, face.up.xyz);
-    let z = dot(p, face.fwd.xyz);
-    let w = face.window;
     var o: PointOut;
     // Depth near/z, nudged nearer by the relative tolerance.
-    o.clip = vec4<f32>(
-        (2.0 * x - (w.x + w.y) * z) / (w.y - w.x),
-        (2.0 * y - (w.z + w.w) * z) / (w.w - w.z),
-        shot.origin.w * (1.0 + shot.params.y),
-        z
-    );
+    o.clip = clip_of(shot.faces[face_index.index], rel.xyz, shot.origin.w * (1.0 + shot.params.y));
     o.id = bitcast<u32>(rel.w);
     return o;
 }
