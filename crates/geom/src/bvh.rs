@@ -26,13 +26,13 @@ pub struct Hit {
 }
 
 #[derive(Clone, Copy, Debug)]
-struct Node {
-    lo: DVec3,
-    hi: DVec3,
+pub struct Node {
+    pub lo: DVec3,
+    pub hi: DVec3,
     /// Leaf: index of the first triangle; inner node: index of the left child (right = left + 1).
-    first: u32,
+    pub first: u32,
     /// Number of triangles in a leaf; 0 for an inner node.
-    count: u32,
+    pub count: u32,
 }
 
 /// A BVH over triangles.
@@ -42,71 +42,12 @@ pub struct Bvh {
     tris: Vec<Triangle>,
 }
 
-const LEAF: usize = 4;
+/// At most this many triangles in a leaf.
+pub const LEAF: usize = 4;
 
 impl Bvh {
     pub fn new(mut tris: Vec<Triangle>) -> Bvh {
-        let mut nodes = Vec::with_capacity(2 * tris.len() / LEAF + 1);
-        if tris.is_empty() {
-            return Bvh { nodes, tris };
-        }
-        nodes.push(Node {
-            lo: DVec3::ZERO,
-            hi: DVec3::ZERO,
-            first: 0,
-            count: 0,
-        });
-        // (node index, start, end)
-        let mut stack = vec![(0usize, 0usize, tris.len())];
-        while let Some((ni, s, e)) = stack.pop() {
-            let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-            let (mut clo, mut chi) = (lo, hi);
-            for t in &tris[s..e] {
-                for p in t.p {
-                    lo = lo.min(p);
-                    hi = hi.max(p);
-                }
-                let c = centroid(t);
-                clo = clo.min(c);
-                chi = chi.max(c);
-            }
-            nodes[ni].lo = lo;
-            nodes[ni].hi = hi;
-            let ext = chi - clo;
-            if e - s <= LEAF || ext.max_element() <= 0.0 {
-                nodes[ni].first = s as u32;
-                nodes[ni].count = (e - s) as u32;
-                continue;
-            }
-            let axis = if ext.x >= ext.y && ext.x >= ext.z {
-                0
-            } else if ext.y >= ext.z {
-                1
-            } else {
-                2
-            };
-            let mid = (s + e) / 2;
-            tris[s..e].select_nth_unstable_by(mid - s, |a, b| {
-                centroid(a)[axis].total_cmp(&centroid(b)[axis])
-            });
-            let left = nodes.len();
-            nodes.push(Node {
-                lo,
-                hi,
-                first: 0,
-                count: 0,
-            });
-            nodes.push(Node {
-                lo,
-                hi,
-                first: 0,
-                count: 0,
-            });
-            nodes[ni].first = left as u32;
-            nodes[ni].count = 0;
-            stack.push((left, s, mid));
-            stack.push((left + 1, mid, e));
-        }
+        let nodes = build_nodes(&mut tris, |t| t.p);
         Bvh { nodes, tris }
     }
 
@@ -238,8 +179,67 @@ impl Bvh {
 }
 
 #[inline]
-fn centroid(t: &Triangle) -> DVec3 {
-    (t.p[0] + t.p[1] + t.p[2]) / 3.0
+/// Builds BVH nodes over triangles given by their corners, top-down, by a
+/// median split along the longest axis of the centroid bounds; reorders
+/// `items` so that each leaf's triangles are contiguous. Deterministic.
+pub fn build_nodes<T>(items: &mut [T], corners: impl Fn(&T) -> [DVec3; 3]) -> Vec<Node> {
+    let mut nodes = Vec::with_capacity(2 * items.len() / LEAF + 1);
+    if items.is_empty() {
+        return nodes;
+    }
+    let empty = Node {
+        lo: DVec3::ZERO,
+        hi: DVec3::ZERO,
+        first: 0,
+        count: 0,
+    };
+    let centroid = |t: &T| {
+        let p = corners(t);
+        (p[0] + p[1] + p[2]) / 3.0
+    };
+    nodes.push(empty);
+    // (node index, start, end)
+    let mut stack = vec![(0usize, 0usize, items.len())];
+    while let Some((ni, s, e)) = stack.pop() {
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        let (mut clo, mut chi) = (lo, hi);
+        for t in &items[s..e] {
+            for p in corners(t) {
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+            let c = centroid(t);
+            clo = clo.min(c);
+            chi = chi.max(c);
+        }
+        nodes[ni].lo = lo;
+        nodes[ni].hi = hi;
+        let ext = chi - clo;
+        if e - s <= LEAF || ext.max_element() <= 0.0 {
+            nodes[ni].first = s as u32;
+            nodes[ni].count = (e - s) as u32;
+            continue;
+        }
+        let axis = if ext.x >= ext.y && ext.x >= ext.z {
+            0
+        } else if ext.y >= ext.z {
+            1
+        } else {
+            2
+        };
+        let mid = (s + e) / 2;
+        items[s..e].select_nth_unstable_by(mid - s, |a, b| {
+            centroid(a)[axis].total_cmp(&centroid(b)[axis])
+        });
+        let left = nodes.len();
+        nodes.push(empty);
+        nodes.push(empty);
+        nodes[ni].first = left as u32;
+        nodes[ni].count = 0;
+        stack.push((left, s, mid));
+        stack.push((left + 1, mid, e));
+    }
+    nodes
 }
 
 /// Whether the ray `o + t d` (`inv` = 1/d per component) meets the closed

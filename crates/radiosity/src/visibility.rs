@@ -1,7 +1,7 @@
 //! Which vertices a shooter sees: the [`Visibility`] trait and its CPU
 //! ray-cast implementation (the reference, and the fallback without a GPU).
 
-use geom::bvh::{Triangle, ray_triangle, slab};
+use geom::bvh::{Node, Triangle, build_nodes, ray_triangle, slab};
 use glam::DVec3;
 use libmesh::{Mesh, SurfaceId, VertId};
 use rayon::prelude::*;
@@ -54,19 +54,6 @@ struct Tri {
     surface: u32,
 }
 
-/// A box, and either the first of `count` triangles (a leaf) or the left
-/// child (`count == 0`; right = left + 1).
-#[derive(Clone, Copy, Debug)]
-struct Node {
-    lo: DVec3,
-    hi: DVec3,
-    first: u32,
-    count: u32,
-}
-
-/// At most this many triangles in a leaf.
-const LEAF: usize = 4;
-
 impl RayVisibility {
     pub fn new(mesh: &Mesh) -> RayVisibility {
         // Patch corners are the mesh's first vertices; keep their positions.
@@ -93,7 +80,7 @@ impl RayVisibility {
                 });
             }
         }
-        let nodes = build(&pts, &mut tris);
+        let nodes = build_nodes(&mut tris, |t| t.v.map(|v| pts[v as usize]));
         RayVisibility { pts, tris, nodes }
     }
 
@@ -161,66 +148,6 @@ impl RayVisibility {
         }
         false
     }
-}
-
-fn centroid(pts: &[DVec3], t: &Tri) -> DVec3 {
-    (pts[t.v[0] as usize] + pts[t.v[1] as usize] + pts[t.v[2] as usize]) / 3.0
-}
-
-/// Top-down median split along the longest axis of the centroid bounds.
-fn build(pts: &[DVec3], tris: &mut [Tri]) -> Vec<Node> {
-    let mut nodes = Vec::with_capacity(2 * tris.len() / LEAF + 1);
-    if tris.is_empty() {
-        return nodes;
-    }
-    let empty = Node {
-        lo: DVec3::ZERO,
-        hi: DVec3::ZERO,
-        first: 0,
-        count: 0,
-    };
-    nodes.push(empty);
-    let mut stack = vec![(0usize, 0usize, tris.len())];
-    while let Some((ni, s, e)) = stack.pop() {
-        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-        let (mut clo, mut chi) = (lo, hi);
-        for t in &tris[s..e] {
-            for v in t.v {
-                lo = lo.min(pts[v as usize]);
-                hi = hi.max(pts[v as usize]);
-            }
-            let c = centroid(pts, t);
-            clo = clo.min(c);
-            chi = chi.max(c);
-        }
-        nodes[ni].lo = lo;
-        nodes[ni].hi = hi;
-        let ext = chi - clo;
-        if e - s <= LEAF || ext.max_element() <= 0.0 {
-            nodes[ni].first = s as u32;
-            nodes[ni].count = (e - s) as u32;
-            continue;
-        }
-        let axis = if ext.x >= ext.y && ext.x >= ext.z {
-            0
-        } else if ext.y >= ext.z {
-            1
-        } else {
-            2
-        };
-        let mid = (s + e) / 2;
-        tris[s..e].select_nth_unstable_by(mid - s, |a, b| {
-            centroid(pts, a)[axis].total_cmp(&centroid(pts, b)[axis])
-        });
-        let left = nodes.len();
-        nodes.push(empty);
-        nodes.push(empty);
-        nodes[ni].first = left as u32;
-        nodes[ni].count = 0;
-        stack.push((left, s, mid));
-        stack.push((left + 1, mid, e));
-    }
-    nodes
 }
 
 impl Visibility for RayVisibility {
