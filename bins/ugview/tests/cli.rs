@@ -14,13 +14,7 @@ fn fixture(rel: &str) -> PathBuf {
 }
 
 fn ugview(args: &[&str]) -> Output {
-    Command::new(EXE)
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .output()
-        .expect("run ugview")
+    cli::testkit::run_with_stdin(EXE, args, b"")
 }
 
 /// An RGB8 picture.
@@ -67,16 +61,7 @@ fn render(args: &[&str]) -> Option<(Pic, Vec<u8>)> {
 
 #[test]
 fn help_has_examples_and_version_names_the_tool() {
-    let help = ugview(&["--help"]);
-    assert!(help.status.success());
-    let text = String::from_utf8(help.stdout).unwrap();
-    assert!(text.contains("Examples:"), "{text}");
-    assert!(text.contains("Usage: ugview"), "{text}");
-    let version = ugview(&["--version"]);
-    assert_eq!(
-        String::from_utf8(version.stdout).unwrap(),
-        format!("ugview {}\n", env!("CARGO_PKG_VERSION"))
-    );
+    cli::testkit::assert_help_and_version(EXE, "ugview", env!("CARGO_PKG_VERSION"));
 }
 
 #[test]

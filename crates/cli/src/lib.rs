@@ -312,3 +312,50 @@ mod tests {
         }
     }
 }
+
+/// Checks every tool's integration tests share: the command line contract
+/// (`--help` with examples, `--version` naming the tool, exit 2 on a bad
+/// option) and running the built binary with bytes on stdin.
+pub mod testkit {
+    use std::io::Write;
+    use std::process::{Command, Output, Stdio};
+
+    /// Runs `exe` with `args` and `stdin` piped in (closed afterwards).
+    pub fn run_with_stdin(exe: &str, args: &[&str], stdin: &[u8]) -> Output {
+        let mut child = Command::new(exe)
+            .args(args)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap_or_else(|e| panic!("cannot start {exe}: {e}"));
+        let mut si = child.stdin.take().expect("stdin");
+        // The tool may exit before reading everything (an early error).
+        let _ = si.write_all(stdin);
+        drop(si);
+        child.wait_with_output().expect("wait for the tool")
+    }
+
+    /// `--help` succeeds with a usage line and examples; `--version` prints
+    /// `NAME VERSION`.
+    pub fn assert_help_and_version(exe: &str, name: &str, version: &str) {
+        let help = run_with_stdin(exe, &["--help"], b"");
+        assert!(help.status.success());
+        let text = String::from_utf8(help.stdout).expect("UTF-8 help");
+        assert!(text.contains("Examples:"), "{text}");
+        assert!(text.contains(&format!("Usage: {name}")), "{text}");
+        let v = run_with_stdin(exe, &["--version"], b"");
+        assert!(v.status.success());
+        assert_eq!(
+            String::from_utf8(v.stdout).expect("UTF-8"),
+            format!("{name} {version}\n")
+        );
+    }
+
+    /// An unknown option is a usage error: exit status 2, nothing on stdout.
+    pub fn assert_unknown_option_is_usage_error(exe: &str) {
+        let out = run_with_stdin(exe, &["--no-such-option"], b"");
+        assert_eq!(out.status.code(), Some(2));
+        assert!(out.stdout.is_empty());
+    }
+}
