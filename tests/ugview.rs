@@ -48,7 +48,11 @@ fn assert_image_golden(rel: &str, png: &[u8]) {
     let share = outliers as f64 / n;
     if mean > MEAN_TOLERANCE || share > OUTLIER_SHARE {
         // The actual picture and a difference picture (per channel, ×4) for review.
-        let name = Path::new(rel).file_stem().unwrap().to_string_lossy().into_owned();
+        let name = Path::new(rel)
+            .file_stem()
+            .unwrap()
+            .to_string_lossy()
+            .into_owned();
         let dump = std::env::temp_dir().join(format!("{name}.actual.png"));
         let _ = std::fs::write(&dump, png);
         let diff = image::RgbImage::from_fn(want.width(), want.height(), |x, y| {
@@ -85,7 +89,9 @@ fn golden_comparison_fails_on_a_different_picture_and_writes_a_diff() {
     if std::env::var_os("UPDATE_GOLDEN").is_some() {
         return;
     }
-    let r = std::panic::catch_unwind(|| assert_image_golden("fixtures/view/cornell-unlit.png", png.get_ref()));
+    let r = std::panic::catch_unwind(|| {
+        assert_image_golden("fixtures/view/cornell-unlit.png", png.get_ref())
+    });
     let msg = match r {
         Ok(()) => panic!("a 40 × 40 magenta square passed the comparison"),
         Err(e) => e.downcast_ref::<String>().cloned().unwrap_or_default(),
