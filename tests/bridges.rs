@@ -1,6 +1,9 @@
-//! The format bridges end to end: obj2ug, ug2obj, ug2ply and mgf2ug on the
-//! fixtures in `fixtures/bridges/`, held against golden files and `ugcheck`.
-//! Build the tools first: `cargo build -p ugcheck -p ug2ply -p ug2obj -p obj2ug -p mgf2ug`.
+//! The format bridges end to end: obj2ug, ug2obj, ug2ply, ply2ug and mgf2ug
+//! on the fixtures in `fixtures/bridges/`, held against golden files and
+//! `ugcheck`; lit models round trip through PLY and OBJ; the Cornell box OBJ
+//! runs through the whole pipeline. Build the tools first: `cargo build -p
+//! ugcheck -p ug2ply -p ug2obj -p obj2ug -p ply2ug -p mgf2ug -p ugplanar -p
+//! ugvlmerge -p ugflip -p ugisect -p ugcopl -p ugclean -p ugcut -p ugrad`.
 
 use std::collections::BTreeMap;
 
@@ -332,4 +335,297 @@ fn importer_errors_are_positioned_and_write_nothing() {
         String::from_utf8(out.stderr).unwrap(),
         "<stdin>:2:7: error: bad vertex reference 'x'\n"
     );
+}
+
+/// Runs a tool on stdin bytes, asserts success, returns stdout bytes.
+fn run_bytes(name: &str, args: &[&str], stdin: &[u8]) -> Vec<u8> {
+    let out = run(name, args, Some(stdin));
+    assert!(
+        out.status.success(),
+        "{name} {args:?} failed with {:?}\nstderr:\n{}",
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out.stdout
+}
+
+fn parse_flat(ug: &str, what: &str) -> ug::Model {
+    ug::parse(ug.as_bytes(), what)
+        .unwrap_or_else(|e| panic!("{what}: {e}"))
+        .model
+        .flatten()
+        .unwrap()
+}
+
+fn close(a: f64, b: f64, rel: f64) -> bool {
+    (a - b).abs() <= rel * a.abs().max(b.abs()) + 1e-300
+}
+
+/// Two UG models have the same faces in order: the same vertex positions
+/// and per-vertex colours (within `rel`), and with `materials` the same face
+/// names and material names and colours.
+fn assert_same_lit(a: &str, b: &str, what: &str, materials: bool) {
+    let (ma, mb) = (parse_flat(a, "original"), parse_flat(b, what));
+    let fa: Vec<ug::FaceId> = ma.top_faces().collect();
+    let fb: Vec<ug::FaceId> = mb.top_faces().collect();
+    assert_eq!(fa.len(), fb.len(), "{what}: face count");
+    let colour = |m: &ug::Model, v: ug::VertexId| -> [f64; 3] {
+        let c = m
+            .vertex(v)
+            .color
+            .unwrap_or_else(|| panic!("{what}: vertex {} has no colour", m.vertex(v).name));
+        let mat = m.material(c);
+        assert!(matches!(mat.def, ug::MaterialDef::Rgb(_)), "{what}");
+        mat.diffuse()
+    };
+    let mut colours = std::collections::BTreeSet::new();
+    for (&x, &y) in fa.iter().zip(&fb) {
+        let (f, g) = (ma.face(x), mb.face(y));
+        assert_eq!(f.contours.len(), 1, "no holes in the test models");
+        assert_eq!(g.contours.len(), 1, "{what}");
+        assert_eq!(
+            f.contours[0].len(),
+            g.contours[0].len(),
+            "{what}: face {x:?}"
+        );
+        for (&u, &v) in f.contours[0].iter().zip(&g.contours[0]) {
+            let (p, q) = (ma.pos(u), mb.pos(v));
+            assert!(
+                (0..3).all(|k| close(p[k], q[k], 1e-12)),
+                "{what}: position {p} vs {q}"
+            );
+            let (c, d) = (colour(&ma, u), colour(&mb, v));
+            assert!(
+                (0..3).all(|k| close(c[k], d[k], 1e-6)),
+                "{what}: colour {c:?} vs {d:?}"
+            );
+            colours.insert(mb.material(mb.vertex(v).color.unwrap()).name.clone());
+        }
+        if materials {
+            assert_eq!(f.name, g.name, "{what}: face name");
+            let (ka, kb) = (
+                f.material.map(|m| ma.material(m)),
+                g.material.map(|m| mb.material(m)),
+            );
+            assert_eq!(ka.map(|m| &m.name), kb.map(|m| &m.name), "{what}: material");
+            if let (Some(ka), Some(kb)) = (ka, kb) {
+                assert_eq!(ka.diffuse(), kb.diffuse(), "{what}: {}", ka.name);
+                assert_eq!(ka.emission(), kb.emission(), "{what}: {}", ka.name);
+            }
+        }
+    }
+    // The colours are ugrad's `c_rgb _radN`.
+    assert!(
+        colours.iter().all(|n| n.starts_with("_rad")),
+        "{what}: {colours:?}"
+    );
+}
+
+/// The Cornell box lit by ugrad (a few shots, ray-cast visibility). The
+/// published red wall is not planar, so ugplanar runs first (ugcut needs
+/// planar faces).
+fn lit_cornell_box() -> String {
+    let planar = run_ok("ugplanar", &[&path("cornell-box.ug")], None);
+    let cut = run_ok("ugcut", &["-l", "100"], Some(planar.as_bytes()));
+    run_ok(
+        "ugrad",
+        &["-q", "--visibility", "ray", "--max-shots", "20"],
+        Some(cut.as_bytes()),
+    )
+}
+
+/// ug → ug2ply (ASCII, binary) → ply2ug and ug → ug2obj --radiosity →
+/// obj2ug --vertex-colours keep positions and radiosity colours.
+fn lit_round_trips(name: &str, ug: &str) {
+    for args in [&[][..], &["--binary"][..]] {
+        let ply = run_bytes("ug2ply", args, ug.as_bytes());
+        let back = run_bytes("ply2ug", &[], &ply);
+        let back = String::from_utf8(back).unwrap();
+        assert_same_lit(ug, &back, &format!("{name} via ug2ply {args:?}"), false);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let src = dir.path().join("lit.ug");
+    std::fs::write(&src, ug).unwrap();
+    let obj = dir.path().join("lit.obj");
+    run_ok(
+        "ug2obj",
+        &[
+            "--radiosity",
+            src.to_str().unwrap(),
+            "-o",
+            obj.to_str().unwrap(),
+        ],
+        None,
+    );
+    let back = run_ok("obj2ug", &["--vertex-colours", obj.to_str().unwrap()], None);
+    assert_same_lit(ug, &back, &format!("{name} via ug2obj --radiosity"), true);
+    // Without --vertex-colours the colours are not read.
+    let plain = run_ok("obj2ug", &[obj.to_str().unwrap()], None);
+    assert!(
+        parse_flat(&plain, "plain")
+            .vertices
+            .iter()
+            .all(|v| v.color.is_none())
+    );
+}
+
+#[test]
+fn lit_square_round_trips_through_ply_and_obj() {
+    let ug = std::fs::read_to_string(fixture("bridges/lit-square.ug")).unwrap();
+    lit_round_trips("lit-square", &ug);
+    // The golden PLY back as UG: ugrad's colours, no material (PLY has none).
+    let back = run_ok("ply2ug", &[&path("bridges/golden/lit-square.ply")], None);
+    assert_golden("fixtures/bridges/golden/lit-square.from-ply.ug", &back);
+}
+
+#[test]
+fn lit_cornell_box_round_trips_through_ply_and_obj() {
+    let lit = lit_cornell_box();
+    let m = parse_flat(&lit, "lit");
+    assert!(m.faces.len() > 1000, "{} faces", m.faces.len());
+    lit_round_trips("lit Cornell box", &lit);
+}
+
+#[test]
+fn ply2ug_errors_are_positioned_and_write_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let header = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n\
+                  property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    let bad = dir.path().join("bad.ply");
+    std::fs::write(&bad, format!("{header}0 0 0\n3 0 0 1\n")).unwrap();
+    let bin_header = "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty double x\n\
+                      property double y\nproperty double z\nend_header\n";
+    let short = dir.path().join("short.ply");
+    let mut bytes = bin_header.as_bytes().to_vec();
+    bytes.extend_from_slice(&1.5f64.to_le_bytes());
+    bytes.extend_from_slice(&[0, 0, 0]);
+    std::fs::write(&short, &bytes).unwrap();
+    let cases = [
+        (
+            &bad,
+            "bad.ply:11:7: error: vertex index 1 is out of range (1 vertices)".to_string(),
+        ),
+        (
+            &short,
+            format!(
+                "short.ply:byte {}: error: truncated data: it ends in property 'y' of element 'vertex' 1 of 1",
+                bin_header.len() + 8
+            ),
+        ),
+    ];
+    for (p, msg) in cases {
+        let out = run("ply2ug", &[p.to_str().unwrap()], None);
+        assert_eq!(out.status.code(), Some(2), "{msg}");
+        assert!(out.stdout.is_empty());
+        let stderr = String::from_utf8(out.stderr).unwrap();
+        assert_eq!(stderr, format!("{}/{msg}\n", dir.path().display()));
+    }
+}
+
+/// Per material of the faces using them: the smallest and largest sum of
+/// the radiosity channels at their vertices.
+fn radiosity_range(m: &ug::Model) -> BTreeMap<String, (f64, f64)> {
+    let mut out: BTreeMap<String, (f64, f64)> = BTreeMap::new();
+    for f in m.top_faces() {
+        let face = m.face(f);
+        let mat = face
+            .material
+            .map_or("-".to_string(), |k| m.material(k).name.clone());
+        for &v in face.contours.iter().flatten() {
+            let c = m.vertex(v).color.expect("lit vertex");
+            let b: f64 = m.material(c).diffuse().iter().sum();
+            let e = out.entry(mat.clone()).or_insert((f64::INFINITY, 0.0));
+            *e = (e.0.min(b), e.1.max(b));
+        }
+    }
+    out
+}
+
+#[test]
+fn cornell_box_obj_runs_through_the_whole_pipeline() {
+    let out = run("obj2ug", &[&path("bridges/cornell-box.obj")], None);
+    assert!(out.status.success());
+    assert!(
+        out.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let ug = String::from_utf8(out.stdout).unwrap();
+    // The same faces as the UG Cornell box: names, corners, materials.
+    let (a, b) = (
+        parse_flat(
+            &std::fs::read_to_string(fixture("cornell-box.ug")).unwrap(),
+            "ug",
+        ),
+        parse_flat(&ug, "obj"),
+    );
+    assert_eq!(a.faces.len(), b.faces.len());
+    for (f, g) in a.faces.iter().zip(&b.faces) {
+        assert_eq!(f.name, g.name);
+        let pa: Vec<DVec3> = f.contours[0].iter().map(|&v| a.pos(v)).collect();
+        let pb: Vec<DVec3> = g.contours[0].iter().map(|&v| b.pos(v)).collect();
+        assert_eq!(pa, pb, "{:?}", f.name);
+        let (ka, kb) = (
+            a.material(f.material.unwrap()),
+            b.material(g.material.unwrap()),
+        );
+        assert_eq!(ka.name, kb.name);
+        assert_eq!((ka.diffuse(), ka.emission()), (kb.diffuse(), kb.emission()));
+    }
+    // The cleaning chain, then a defect-free model.
+    let mut model = ug;
+    for tool in [
+        "ugplanar",
+        "ugvlmerge",
+        "ugflip",
+        "ugisect",
+        "ugcopl",
+        "ugclean",
+    ] {
+        model = run_ok(tool, &["-q"], Some(model.as_bytes()));
+    }
+    let check = run(
+        "ugcheck",
+        &["--deny", "defects", "-"],
+        Some(model.as_bytes()),
+    );
+    assert_eq!(
+        check.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&check.stdout)
+    );
+    let r = report(&model);
+    for k in [
+        "nonplanar",
+        "tvertices",
+        "intersecting",
+        "overlapping",
+        "coincident",
+        "degenerate",
+        "inconsistent",
+    ] {
+        assert_eq!(r[k].as_array().unwrap().len(), 0, "{k}");
+    }
+    assert_eq!(r["counts"]["emitters"], 1);
+    // Meshed and lit: the light is the brightest surface.
+    let cut = run_ok("ugcut", &["-q", "-l", "100"], Some(model.as_bytes()));
+    let lit = run_ok(
+        "ugrad",
+        &["-q", "--visibility", "ray", "--converge", "1e-2"],
+        Some(cut.as_bytes()),
+    );
+    let range = radiosity_range(&parse_flat(&lit, "lit"));
+    assert_eq!(
+        range.keys().collect::<Vec<_>>(),
+        ["green", "light", "red", "white"],
+        "{range:?}"
+    );
+    let light_min = range["light"].0;
+    for (m, (_, hi)) in &range {
+        if m != "light" {
+            assert!(*hi < light_min, "{m} is brighter than the light: {range:?}");
+        }
+    }
+    assert!(range["white"].1 > 0.0, "{range:?}");
 }

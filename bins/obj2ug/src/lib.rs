@@ -2,7 +2,9 @@
 //!
 //! What is read (see docs/format.md, "Bridges"):
 //!
-//! * `v x y z [w | r g b]` (only x, y, z are used), `f`/`fo` with `v`, `v/vt`,
+//! * `v x y z [w | r g b]` (x, y, z; with [`Options::vertex_colours`] the
+//!   colours `r g b` become per-vertex UG colours, one `c_rgb _radN` per
+//!   distinct value as `ugrad` writes them), `f`/`fo` with `v`, `v/vt`,
 //!   `v//vn`, `v/vt/vn` references, negative (relative) indices and n-gons,
 //!   `l` polylines (as UG wires), `o`/`g` names (face names, sanitised to UG
 //!   identifiers and made unique: `wall`, `wall.2`, …), `usemtl`, `mtllib`.
@@ -39,6 +41,9 @@ pub struct Options {
     pub strict: bool,
     /// Materials to mark as emitters: (OBJ or UG material name, emission).
     pub emit: Vec<(String, [f64; 3])>,
+    /// `v x y z r g b` colours become per-vertex colours (radiosity, as
+    /// `ug2obj --radiosity` writes them) instead of being ignored.
+    pub vertex_colours: bool,
 }
 
 /// The converted model and the warnings for stderr.
@@ -48,6 +53,8 @@ pub struct Converted {
     pub warnings: Vec<String>,
     /// Faces dropped as degenerate.
     pub dropped: usize,
+    /// Vertices with `r g b` colours that were ignored (without [`Options::vertex_colours`]).
+    pub colours_ignored: usize,
 }
 
 /// Warnings, at most [`WARN_LIMIT`] per kind, the rest counted.
@@ -447,6 +454,8 @@ pub fn convert_with(
     let mut warn = Warnings::default();
     let mut warned_kw: FxHashSet<String> = FxHashSet::default();
     let mut positions: Vec<glam::DVec3> = Vec::new();
+    let mut colours: Vec<Option<[f64; 3]>> = Vec::new();
+    let mut colours_ignored = 0usize;
     let mut faces: Vec<RawItem> = Vec::new();
     let mut wires: Vec<RawItem> = Vec::new();
     let mut mtl: FxHashMap<String, MtlMaterial> = FxHashMap::default();
@@ -465,6 +474,19 @@ pub fn convert_with(
                     &["x coordinate", "y coordinate", "z coordinate"],
                 )?;
                 positions.push(glam::DVec3::new(c[0], c[1], c[2]));
+                // `v x y z r g b`: exactly six numbers.
+                let rgb = if toks.len() == 7 && opts.vertex_colours {
+                    let names = ["red component", "green component", "blue component"];
+                    let mut rgb = [0.0; 3];
+                    for (k, w) in names.iter().enumerate() {
+                        rgb[k] = number(file, &toks[4 + k], w)?;
+                    }
+                    Some(rgb)
+                } else {
+                    colours_ignored += usize::from(toks.len() == 7);
+                    None
+                };
+                colours.push(rgb);
             }
             b"f" | b"fo" | b"l" => {
                 let mut verts = Vec::with_capacity(toks.len() - 1);
@@ -633,18 +655,56 @@ pub fn convert_with(
         }
     }
     // Vertices in order of first use.
-    let mut vid: Vec<Option<VertexId>> = vec![None; positions.len()];
+    let mut order: Vec<usize> = Vec::new();
+    let mut used = vec![false; positions.len()];
     for item in faces.iter().chain(wires.iter()) {
         for &v in &item.verts {
-            if vid[v].is_none() {
-                let n = model.vertices.len() + 1;
-                vid[v] = Some(model.add_vertex(Vertex {
-                    name: format!("v{n}"),
-                    pos: positions[v],
-                    color: None,
-                }));
+            if !used[v] {
+                used[v] = true;
+                order.push(v);
             }
         }
+    }
+    // Vertex colours: one `c_rgb _radN` per distinct value, in vertex order,
+    // before the first vertex (as ugrad writes them; names taken skipped).
+    let mut colour_ids: FxHashMap<[u64; 3], ug::MaterialId> = FxHashMap::default();
+    let mut vcolour: Vec<Option<ug::MaterialId>> = vec![None; positions.len()];
+    if opts.vertex_colours {
+        let taken: FxHashSet<String> = model.materials.iter().map(|m| m.name.clone()).collect();
+        let mut counter = 0usize;
+        for &v in &order {
+            let Some(rgb) = colours[v] else { continue };
+            let key = rgb.map(|x| (x + 0.0).to_bits());
+            let id = *colour_ids.entry(key).or_insert_with(|| {
+                let name = loop {
+                    let cand = format!("_rad{counter}");
+                    counter += 1;
+                    if !taken.contains(&cand) {
+                        break cand;
+                    }
+                };
+                model.add_material(Material {
+                    name,
+                    def: MaterialDef::Rgb(rgb.map(|x| x + 0.0)),
+                })
+            });
+            vcolour[v] = Some(id);
+        }
+        if colour_ids.is_empty() {
+            warn.push(
+                "colours",
+                "warning: --vertex-colours: no vertex has colours ('v x y z r g b')".to_string(),
+            );
+        }
+    }
+    let mut vid: Vec<Option<VertexId>> = vec![None; positions.len()];
+    for &v in &order {
+        let n = model.vertices.len() + 1;
+        vid[v] = Some(model.add_vertex(Vertex {
+            name: format!("v{n}"),
+            pos: positions[v],
+            color: vcolour[v],
+        }));
     }
     let ids =
         |item: &RawItem| -> Vec<VertexId> { item.verts.iter().filter_map(|&v| vid[v]).collect() };
@@ -673,6 +733,7 @@ pub fn convert_with(
         model,
         warnings: warn.finish(),
         dropped,
+        colours_ignored,
     })
 }
 
@@ -921,6 +982,37 @@ mod tests {
         let c = conv("v 0 0 0 # origin\nv 1 \\\n 0 0\nv 0 1 0\nf 1 2 \\\n3\n").unwrap();
         assert_eq!(c.model.faces.len(), 1);
         assert_eq!(c.model.vertices[1].pos.x, 1.0);
+    }
+
+    #[test]
+    fn vertex_colours_on_request() {
+        let src = "mtllib m.mtl\nv 0 0 0 0.5 0.25 0.125\nv 1 0 0 3.141592653589793 0 0\n\
+                   v 0 1 0 0.5 0.25 0.125\nv 1 1 1\nusemtl _rad0\nf 1 2 3\nf 2 4 3\n";
+        let files = [("m.mtl", "newmtl _rad0\nKd 0.5 0.5 0.5\n")];
+        let plain = conv_with(src, &files, &Options::default()).unwrap();
+        assert_eq!(plain.colours_ignored, 3);
+        assert!(plain.model.vertices.iter().all(|v| v.color.is_none()));
+        let opts = Options {
+            vertex_colours: true,
+            ..Default::default()
+        };
+        let c = conv_with(src, &files, &opts).unwrap();
+        assert_eq!(c.colours_ignored, 0);
+        assert_eq!(
+            ug_text(&c),
+            "defmat _rad0;\n  diffuse_rgb 0.5 0.5 0.5;\nend;\n\
+             c_rgb _rad1 0.5 0.25 0.125;\nc_rgb _rad2 3.141592653589793 0 0;\n\
+             v v1 0 0 0 _rad1;\nv v2 1 0 0 _rad2;\nv v3 0 1 0 _rad1;\nv v4 1 1 1;\n\
+             f (v1 v2 v3) _rad0;\nf (v2 v4 v3) _rad0;\n"
+        );
+        assert!(c.warnings.is_empty(), "{:?}", c.warnings);
+        let e = conv_with("v 0 0 0 1 x 1\n", &[], &opts).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "t.obj:1:11: error: bad number 'x' (expected green component)"
+        );
+        let none = conv_with("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", &[], &opts).unwrap();
+        assert_eq!(none.warnings.len(), 1, "{:?}", none.warnings);
     }
 
     #[test]

@@ -2,52 +2,20 @@
 //! (This integration test also makes `cargo test` build the binary, which
 //! the end-to-end tests in the workspace's `tests/` run.)
 
-use std::process::Command;
-
 const EXE: &str = env!("CARGO_BIN_EXE_obj2ug");
 
 #[test]
 fn help_has_examples_and_version_names_the_tool() {
-    let help = Command::new(EXE)
-        .arg("--help")
-        .output()
-        .expect("run --help");
-    assert!(help.status.success());
-    let text = String::from_utf8(help.stdout).unwrap();
-    assert!(text.contains("Examples:"), "{text}");
-    assert!(text.contains("Usage: obj2ug"), "{text}");
-    let version = Command::new(EXE)
-        .arg("--version")
-        .output()
-        .expect("run --version");
-    assert!(version.status.success());
-    assert_eq!(
-        String::from_utf8(version.stdout).unwrap(),
-        format!("obj2ug {}\n", env!("CARGO_PKG_VERSION"))
-    );
+    cli::testkit::assert_help_and_version(EXE, "obj2ug", env!("CARGO_PKG_VERSION"));
 }
 
 #[test]
 fn unknown_options_are_usage_errors() {
-    let out = Command::new(EXE)
-        .arg("--no-such-option")
-        .output()
-        .expect("run");
-    assert_eq!(out.status.code(), Some(2));
-    assert!(out.stdout.is_empty());
+    cli::testkit::assert_unknown_option_is_usage_error(EXE);
 }
 
 fn run(args: &[&str], stdin: &[u8]) -> std::process::Output {
-    use std::io::Write;
-    let mut child = Command::new(EXE)
-        .args(args)
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .expect("run");
-    let _ = child.stdin.take().unwrap().write_all(stdin);
-    child.wait_with_output().expect("wait")
+    cli::testkit::run_with_stdin(EXE, args, stdin)
 }
 
 #[test]

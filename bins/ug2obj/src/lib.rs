@@ -12,7 +12,10 @@
 //!   `newmtl NAME`, `Kd` (diffuse reflectance) and `Ke` (emission).
 //! * Lit models (per-vertex colours from `ugrad`) get the widely supported
 //!   `v x y z r g b` extension, with display colours as in `ug2ply`: sRGB of
-//!   B/π × 2^exposure, clamped, written with 4 decimals.
+//!   B/π × 2^exposure, clamped, written with 4 decimals; with
+//!   [`ObjOptions::radiosity`] (`--radiosity`) the colours are the raw
+//!   radiosity B instead, written exactly (shortest round-trip decimals), for
+//!   `obj2ug --vertex-colours` to read back.
 
 use std::io::Write as _;
 
@@ -29,6 +32,8 @@ pub struct ObjOptions {
     pub exposure: f64,
     /// The `mtllib` line's file name (none: no `mtllib` line).
     pub mtllib: Option<String>,
+    /// Vertex colours of lit models are the raw radiosity B, not display colours.
+    pub radiosity: bool,
 }
 
 /// The OBJ and MTL texts, counts and warnings.
@@ -157,6 +162,11 @@ pub fn to_obj(m: &Model, opts: &ObjOptions) -> ObjOutput {
     let mut obj = Vec::new();
     let mut b = ryu::Buffer::new();
     obj.extend_from_slice(b"# written by ug2obj\n");
+    if mesh.lit && opts.radiosity {
+        obj.extend_from_slice(
+            b"# vertex colours: radiosity B (ug2obj --radiosity; read back with obj2ug --vertex-colours)\n",
+        );
+    }
     if let Some(lib) = &opts.mtllib {
         let _ = writeln!(obj, "mtllib {lib}");
     }
@@ -165,12 +175,24 @@ pub fn to_obj(m: &Model, opts: &ObjOptions) -> ObjOutput {
         for c in v.pos.to_array() {
             push_num(&mut obj, c, &mut b);
         }
-        if mesh.lit {
-            for c in v.display {
-                let _ = write!(obj, " {:.4}", srgb_encode(c));
+        match v.radiosity {
+            Some(rad) if opts.radiosity => {
+                for c in rad {
+                    push_num(&mut obj, c, &mut b);
+                }
             }
+            _ if mesh.lit => {
+                for c in v.display {
+                    let _ = write!(obj, " {:.4}", srgb_encode(c));
+                }
+            }
+            _ => {}
         }
         obj.push(b'\n');
+    }
+    if opts.radiosity && !mesh.lit {
+        mesh.warnings
+            .push("warning: --radiosity: the model has no vertex colours (it is not lit)".into());
     }
     let mut st = State {
         group: None,
@@ -291,6 +313,29 @@ mod tests {
         let obj = String::from_utf8(out.obj).unwrap();
         assert!(obj.contains("v 0 0 0 1.0000 0.0000 0.0000\n"), "{obj}");
         assert!(obj.contains("g edge\nl 4 5\n"), "{obj}");
+        let out = to_obj(
+            &m,
+            &ObjOptions {
+                radiosity: true,
+                ..Default::default()
+            },
+        );
+        let obj = String::from_utf8(out.obj).unwrap();
+        assert!(obj.contains("v 0 0 0 3.141592653589793 0 0\n"), "{obj}");
+        // Wire vertices without a colour get B = 0.
+        assert!(obj.contains("v 5 5 5 0 0 0\n"), "{obj}");
+        assert!(obj.starts_with("# written by ug2obj\n# vertex colours: radiosity B"));
+        assert!(out.warnings.is_empty());
+        let unlit = parse("v a 0 0 0; v b 1 0 0; v c 0 1 0; f (a b c);");
+        let out = to_obj(
+            &unlit,
+            &ObjOptions {
+                radiosity: true,
+                ..Default::default()
+            },
+        );
+        assert!(String::from_utf8(out.obj).unwrap().contains("v 1 0 0\n"));
+        assert_eq!(out.warnings.len(), 1);
     }
 
     #[test]

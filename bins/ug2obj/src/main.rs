@@ -10,7 +10,9 @@ Examples:
   ug2obj lit.ug --exposure 1 -o lit.obj    vertex colours two times brighter
   ug2obj model.ug --mtl model.mtl > model.obj
                                            to stdout, the MTL only with --mtl
-  ug2obj --triangles model.ug -o tris.obj  triangles only";
+  ug2obj --triangles model.ug -o tris.obj  triangles only
+  ug2obj --radiosity lit.ug -o lit.obj && obj2ug --vertex-colours lit.obj > back.ug
+                                           colours are the radiosity B: a lossless round trip";
 
 /// Write a UniGrafix model as Wavefront OBJ with an MTL material library.
 ///
@@ -18,8 +20,9 @@ Examples:
 /// 'usemtl' / 'newmtl' with Kd (diffuse) and Ke (emission); faces with holes
 /// are triangulated; wires become 'l' lines. Lit models (per-vertex colours
 /// from ugrad) get 'v x y z r g b' display colours: sRGB of the radiance
-/// B/pi times 2^exposure, clamped. With -o FILE.obj the MTL is written
-/// beside it as FILE.mtl; to stdout, only with --mtl.
+/// B/pi times 2^exposure, clamped (--radiosity: the radiosity B itself,
+/// exactly, for obj2ug --vertex-colours). With -o FILE.obj the MTL is
+/// written beside it as FILE.mtl; to stdout, only with --mtl.
 #[derive(Parser, Debug)]
 #[command(version, after_help = EXAMPLES)]
 struct Args {
@@ -34,6 +37,9 @@ struct Args {
     /// Triangulate every face (default: only faces with holes).
     #[arg(long)]
     triangles: bool,
+    /// Vertex colours of lit models are the radiosity B, written exactly (not display colours).
+    #[arg(long, conflicts_with = "exposure")]
+    radiosity: bool,
 }
 
 fn finite(s: &str) -> Result<f64, String> {
@@ -81,6 +87,7 @@ fn main() -> std::process::ExitCode {
                 triangles: args.triangles,
                 exposure: args.exposure,
                 mtllib,
+                radiosity: args.radiosity,
             },
         );
         if !c.quiet {

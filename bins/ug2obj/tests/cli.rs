@@ -8,33 +8,12 @@ const EXE: &str = env!("CARGO_BIN_EXE_ug2obj");
 
 #[test]
 fn help_has_examples_and_version_names_the_tool() {
-    let help = Command::new(EXE)
-        .arg("--help")
-        .output()
-        .expect("run --help");
-    assert!(help.status.success());
-    let text = String::from_utf8(help.stdout).unwrap();
-    assert!(text.contains("Examples:"), "{text}");
-    assert!(text.contains("Usage: ug2obj"), "{text}");
-    let version = Command::new(EXE)
-        .arg("--version")
-        .output()
-        .expect("run --version");
-    assert!(version.status.success());
-    assert_eq!(
-        String::from_utf8(version.stdout).unwrap(),
-        format!("ug2obj {}\n", env!("CARGO_PKG_VERSION"))
-    );
+    cli::testkit::assert_help_and_version(EXE, "ug2obj", env!("CARGO_PKG_VERSION"));
 }
 
 #[test]
 fn unknown_options_are_usage_errors() {
-    let out = Command::new(EXE)
-        .arg("--no-such-option")
-        .output()
-        .expect("run");
-    assert_eq!(out.status.code(), Some(2));
-    assert!(out.stdout.is_empty());
+    cli::testkit::assert_unknown_option_is_usage_error(EXE);
 }
 
 #[test]
