@@ -62,6 +62,7 @@ fn automatic_mode_orients_as_a_person_would() {
         "furnished-room",
         "open-box",
         "wall-window",
+        "doorway-room",
     ] {
         let path = fixture(&format!("flip/{name}.ug"));
         let src = std::fs::read_to_string(&path).unwrap();

@@ -16,9 +16,9 @@
 //!      faces the side from which more of the rest of the scene is seen:
 //!      rays are cast from both sides of every face (a fixed, deterministic
 //!      cosine-weighted set); a hit at distance t counts t² (the surface a
-//!      ray's solid angle covers there), weighted by face area. Surface of
-//!      other components decides first; the component's own faces break
-//!      ties (a box missing a side faces inward). When the two sides differ
+//!      ray's solid angle covers there), weighted by face area; surface of
+//!      other components and the component's own faces both count (a box
+//!      missing a side faces inward, a building floor faces its rooms). When the two sides differ
 //!      by less than 5% the component is *ambiguous*: it is left as it is (or
 //!      made double-sided with `double_sided_ambiguous`) and reported.
 //!
@@ -459,7 +459,14 @@ fn decide(
         let (sum, diff) = (s[0] + s[1], s[0] - s[1]);
         (sum > 0.0 && diff.abs() > 0.05 * sum).then_some(if diff > 0.0 { 1 } else { -1 })
     };
-    match verdict(other).or_else(|| verdict(own)) {
+    // Everything the two sides see counts, the component's own faces too: a
+    // whole building floor (one open component: rooms joined by doorways)
+    // sees its own walls and ceilings from the inside, and only the odd
+    // separate part from the outside. (Letting other components decide
+    // first turned the Soda Hall floor inside out.) Own faces alone still
+    // decide where nothing else is seen (a box missing a side faces inward).
+    let all = [other[0] + own[0], other[1] + own[1]];
+    match verdict(all) {
         Some(d) => (d, Reason::Scene),
         None => (0, Reason::None),
     }
