@@ -308,3 +308,37 @@ fn time_limit_stops_and_writes() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("stopped (TimeLimit)"));
     assert!(ug::parse(&out.stdout, "partial").is_ok());
 }
+
+#[test]
+fn degenerate_slivers_are_left_out_with_a_warning() {
+    // A zero-area triangle, as a cutter can leave where two input points lie
+    // a hair apart: lit, it would carry no energy; it is dropped, not refused.
+    let input = "c_rgb w 0.5 0.5 0.5;
+        defmat lamp; emission_rgb 1 1 1; end;
+        v a 0 0 0; v b 1 0 0; v c 1 1 0; v d 0 1 0; v e 2 0 0;
+        f floor (a b c d) w; f sliver (a b e) w;
+        v p 0 0 1; v q 0 1 1; v r 1 1 1; v s 1 0 1; f light (p q r s) lamp;";
+    let out = run(
+        "ugrad",
+        &["--max-shots", "3", "--visibility", "ray"],
+        Some(input.as_bytes()),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("warning: face sliver: zero area"), "{err}");
+    let m = ug::parse(&out.stdout, "lit").unwrap().model;
+    assert!(
+        m.faces
+            .iter()
+            .all(|f| !f.name.as_deref().unwrap_or("").starts_with("sliver"))
+    );
+    assert!(
+        m.faces
+            .iter()
+            .any(|f| f.name.as_deref().unwrap_or("").starts_with("floor"))
+    );
+}

@@ -156,7 +156,9 @@ impl Mesh {
     /// patches are coplanar within `eps`, of the same material and facing the
     /// same way. Each surface gets its own copies of its vertices, created in
     /// face order. `eps` is a distance; when it is not positive it defaults to
-    /// 10⁻⁶ of the bounding-box diagonal.
+    /// 10⁻⁶ of the bounding-box diagonal. Degenerate faces (zero area, or two
+    /// corners within `eps`) are left out and listed by
+    /// [`Mesh::degenerate_faces`].
     pub fn from_model(m: &Model, eps: f64) -> Result<Mesh, BuildError> {
         if !m.instances.is_empty() {
             return Err(BuildError::NotFlat);
@@ -175,6 +177,7 @@ impl Mesh {
         // Patches.
         let mut classes = Classes::new(m.vertices.len(), eps);
         let mut raw: Vec<RawPatch> = Vec::with_capacity(faces.len());
+        let mut degenerate: Vec<(String, String)> = Vec::new();
         for (k, &f) in faces.iter().enumerate() {
             let face = &m.faces[f.idx()];
             let not_patch = |reason: String| BuildError::NotPatch {
@@ -200,8 +203,12 @@ impl Mesh {
                 cls[i] = classes.class(v, m.pos(v));
             }
             let n = c.len();
+            // Degenerate patches (slivers a cutter can leave where two input
+            // points lie within a hair of each other) carry no area and no
+            // energy: they are dropped and reported, not refused.
             if (0..n).any(|i| (i + 1..n).any(|j| cls[i] == cls[j])) {
-                return Err(not_patch("repeats a vertex (or two coincide)".into()));
+                degenerate.push((label(m, f, k), "repeats a vertex (or two coincide)".into()));
+                continue;
             }
             let newell = geom::newell_normal(&pts);
             let (lo, hi) = pts
@@ -210,7 +217,11 @@ impl Mesh {
             let size = (hi - lo).length();
             let area = newell.length() / 2.0;
             if area.is_nan() || area <= eps * size {
-                return Err(not_patch("zero area (its vertices are collinear)".into()));
+                degenerate.push((
+                    label(m, f, k),
+                    "zero area (its vertices are collinear)".into(),
+                ));
+                continue;
             }
             let unit = newell.normalize();
             let centroid = pts.iter().copied().sum::<DVec3>() / n as f64;
@@ -400,6 +411,7 @@ impl Mesh {
             twin_verts,
             surfaces,
             eps,
+            degenerate,
         })
     }
 }

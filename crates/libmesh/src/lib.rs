@@ -274,6 +274,8 @@ pub struct Mesh {
     pub(crate) surfaces: Vec<Surface>,
     /// The epsilon the mesh was built with.
     pub(crate) eps: f64,
+    /// Input faces left out as degenerate: (label, reason).
+    pub(crate) degenerate: Vec<(String, String)>,
 }
 
 /// What a [`Mesh::split`] did.
@@ -537,6 +539,12 @@ impl Mesh {
             }
         }
         seen
+    }
+
+    /// Input faces [`Mesh::from_model`] left out as degenerate (zero area, or
+    /// two corners within epsilon): (label, reason), in input order.
+    pub fn degenerate_faces(&self) -> &[(String, String)] {
+        &self.degenerate
     }
 
     /// The epsilon the mesh was built with.

@@ -565,8 +565,22 @@ fn build_errors() {
     assert!(
         matches!(&e, BuildError::NotPatch { face, reason } if face == "warp" && reason.contains("planar"))
     );
-    let e = err("v a 0 0 0; v b 1 0 0; v c 2 0 0; f line (a b c);");
-    assert!(matches!(&e, BuildError::NotPatch { reason, .. } if reason.contains("zero area")));
+    // Degenerate faces are left out and reported, not refused.
+    let m = ug::parse(
+        b"v a 0 0 0; v b 1 0 0; v c 2 0 0; v d 1 1 0; f line (a b c); f ok (a b d); f pinch (a a d);",
+        "t.ug",
+    )
+    .unwrap()
+    .model;
+    let mesh = Mesh::from_model(&m, 1e-9).unwrap();
+    assert_eq!(mesh.num_patches(), 1);
+    let d = mesh.degenerate_faces();
+    assert_eq!(d.len(), 2);
+    assert!(d[0].0 == "line" && d[0].1.contains("zero area"), "{d:?}");
+    assert!(
+        d[1].0 == "pinch" && d[1].1.contains("repeats a vertex"),
+        "{d:?}"
+    );
     let e = err(
         "v a 0 0 0; v b 3 0 0; v c 3 3 0; v d 0 3 0; v e 1 1 0; v f 1 2 0; v g 2 1 0;
          f holed (a b c d) (e f g);",
