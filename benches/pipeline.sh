@@ -1,19 +1,37 @@
 #!/usr/bin/env bash
-# The whole pipeline on generated buildings of growing size (DESIGN.md §8):
+# The whole recommended pipeline on generated buildings of growing size
+# (DESIGN.md §8, issue #9):
 #
-#   ugbuilding --faces N --messy | ugplanar | ugflip | ugvlmerge | ugcut -l LEN | ugrad --max-shots SHOTS
+#   ugbuilding --faces N --messy --seed SEED
+#     | ugplanar | ugvlmerge | ugflip | ugisect | ugcopl | ugclean
+#     | ugcut -l LEN | ugrad -v --visibility ray --max-shots SHOTS
 #
-# stage by stage, with files in a temporary directory, printing a Markdown
-# table: input faces, faces after ugvlmerge, patches, leaf elements after the
-# solution, and per stage the wall time and peak memory (peak memory only
-# with GNU time at /usr/bin/time; otherwise times from bash's `time`).
+# stage by stage, with files in a temporary directory, printing two Markdown
+# tables:
+#
+# 1. per size: input faces, faces after ugclean (the cleaned surfaces),
+#    patches (faces after ugcut), leaf elements after the solution, and per
+#    stage the wall time in seconds and the peak resident memory in MB
+#    (`s / MB`; peak memory only with GNU time at /usr/bin/time, else "–");
+#    ugrad's set-up (reading, meshing, BVH) and its milliseconds per shot
+#    (solve time / shots, from the `time:` line of `ugrad -v`); the chain
+#    total (ugbuilding not included);
+# 2. growth from each size to the next: for every stage, (time ratio) /
+#    (input-face ratio): about 1 for linear growth, about the size ratio
+#    (10 for 10× the faces) for quadratic growth. ms per shot is compared
+#    with the ratio of leaf elements as well. Times under 0.05 s are too
+#    short to compare and give "–".
 #
 # Usage: benches/pipeline.sh [FACES...]          (default: 1000 10000 100000)
 #
-# 100000 (or any size after the first two) runs only when ten times the
-# previous size's chain took under 5 minutes (BIG=1 runs it anyway).
+# Any size after the first two runs only when ten times the previous size's
+# chain took under 5 minutes (BIG=1 runs it anyway).
 # Environment: LEN (ugcut -l, metres; default 1), SHOTS (ugrad --max-shots;
-# default 100), SEED (default 1), KEEP=1 keeps the directory of models.
+# default 100), SEED (default 1), RAD_EPS (ugrad -e, model units; default
+# ugrad's own, 1e-6 of the diagonal), KEEP=1 keeps the directory of models
+# (and every stage's stderr, e.g. ugrad's per-shot lines in N/8.err).
+# A stage that fails ends its size's row with "failed" (its stderr is shown)
+# and the next size runs.
 #
 # The models come from crates/building with Dirt::messy(): 30% flipped faces,
 # 10% non-planar floor quads, half the walls with T-vertices and nearly
@@ -25,6 +43,7 @@ cd "$(dirname "$0")/.."
 LEN=${LEN:-1}
 SHOTS=${SHOTS:-100}
 SEED=${SEED:-1}
+RAD_EPS=${RAD_EPS:-}
 if [ $# -gt 0 ]; then sizes=("$@"); else sizes=(1000 10000 100000); fi
 
 echo "building release binaries…" >&2
@@ -41,35 +60,59 @@ fi
 gnu_time=
 if [ -x /usr/bin/time ] && /usr/bin/time -v true 2>/dev/null; then gnu_time=1; fi
 
-# run NAME OUT_STDERR CMD… : runs CMD, sets $secs and $peak (MB, or "–").
+now() { date +%s%N; }
+
+# run NAME OUT_STDERR CMD… : runs CMD, sets $secs (wall, ms resolution),
+# $peak (MB, or "–") and $ok (0 when CMD failed).
 run() {
-    local name=$1 err=$2
+    local name=$1 err=$2 t0 t1
     shift 2
+    ok=1
+    t0=$(now)
     if [ -n "$gnu_time" ]; then
-        /usr/bin/time -v -o "$tmp/time.$name" "$@" 2>"$err"
-        local wall kb
-        wall=$(sed -n 's/.*Elapsed (wall clock) time (h:mm:ss or m:ss): //p' "$tmp/time.$name")
+        /usr/bin/time -v -o "$tmp/time.$name" "$@" 2>"$err" || ok=0
+    else
+        "$@" 2>"$err" || ok=0
+    fi
+    t1=$(now)
+    secs=$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.3f", (b - a) / 1e9 }')
+    if [ -n "$gnu_time" ]; then
+        local kb
         kb=$(sed -n 's/.*Maximum resident set size (kbytes): //p' "$tmp/time.$name")
-        secs=$(awk -v t="$wall" 'BEGIN { n = split(t, p, ":"); s = 0; for (i = 1; i <= n; i++) s = s * 60 + p[i]; printf "%.2f", s }')
         peak=$(awk -v k="$kb" 'BEGIN { printf "%.0f", k / 1024 }')
     else
-        local TIMEFORMAT=%R t
-        t=$({ time "$@" 2>"$err"; } 2>&1)
-        secs=$(printf "%.2f" "$t")
         peak="–"
     fi
 }
 
 faces() { grep -c '^f ' "$1" || true; }
+# Thousands separators: 1234567 → 1,234,567.
+num() { printf "%s" "$1" | sed -e ':a' -e 's/\([0-9]\)\([0-9]\{3\}\)\($\|,\)/\1,\2\3/' -e 'ta'; }
 
-echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //'), $(free -h | awk '/^Mem:/ { print $2 }') memory" >&2
-echo "chain: ugbuilding --faces N --messy --seed $SEED | ugplanar | ugflip | ugvlmerge | ugcut -l $LEN | ugrad --max-shots $SHOTS" >&2
-if [ -n "$gnu_time" ]; then unit="s / peak MB"; else unit="s"; fi
+stages=(ugplanar ugvlmerge ugflip ugisect ugcopl ugclean "ugcut -l $LEN" "ugrad -v --visibility ray --max-shots $SHOTS${RAD_EPS:+ -e $RAD_EPS}")
+names=(ugplanar ugvlmerge ugflip ugisect ugcopl ugclean ugcut ugrad)
+
+echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //'), $(free -h | awk '/^Mem:/ { print $2 }') memory, load average $(cut -d' ' -f1-3 /proc/loadavg)" >&2
+echo "chain: ugbuilding --faces N --messy --seed $SEED | ugplanar | ugvlmerge | ugflip | ugisect | ugcopl | ugclean | ugcut -l $LEN | ugrad -v --visibility ray --max-shots $SHOTS${RAD_EPS:+ -e $RAD_EPS}" >&2
+if [ -n "$gnu_time" ]; then unit="s / MB"; else unit="s"; fi
 
 echo
-echo "| input faces | faces after ugvlmerge | patches | elements | ugbuilding ($unit) | ugplanar | ugflip | ugvlmerge | ugcut | ugrad | chain (s) |"
-echo "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+header="| input faces | faces after ugclean | patches | leaf elements |"
+rule="|---:|---:|---:|---:|"
+for nm in "${names[@]}"; do
+    header+=" $nm ($unit) |"
+    rule+="---:|"
+done
+header+=" ugrad set-up (s) | ugrad ms / shot | chain (s) |"
+rule+="---:|---:|---:|"
+echo "$header"
+echo "$rule"
 
+# Per size, for the growth table: input faces, leaf elements, stage times, ms per shot.
+g_faces=()
+g_elems=()
+g_times=()
+g_ms=()
 prev_chain=
 k=0
 for n in "${sizes[@]}"; do
@@ -82,24 +125,86 @@ for n in "${sizes[@]}"; do
     fi
     d="$tmp/$n"
     mkdir -p "$d"
-    cells=()
     run ugbuilding "$d/0.err" "$bin/ugbuilding" --faces "$n" --messy --seed "$SEED" -o "$d/0.ug"
-    cells+=("$secs${gnu_time:+ / $peak}")
+    cells=()
+    times=()
+    failed=
     chain=0
     i=0
-    for stage in ugplanar ugflip ugvlmerge "ugcut -l $LEN" "ugrad -v --max-shots $SHOTS"; do
+    for stage in "${stages[@]}"; do
         read -r -a cmd <<<"$stage"
         name=${cmd[0]}
         run "$name" "$d/$((i + 1)).err" "$bin/$name" "${cmd[@]:1}" -o "$d/$((i + 1)).ug" "$d/$i.ug"
+        if [ "$ok" = 0 ]; then
+            echo "$n faces: $name failed:" >&2
+            tail -5 "$d/$((i + 1)).err" >&2
+            failed=$name
+            break
+        fi
         cells+=("$secs${gnu_time:+ / $peak}")
-        chain=$(awk -v a="$chain" -v b="$secs" 'BEGIN { printf "%.2f", a + b }')
+        times+=("$secs")
+        chain=$(awk -v a="$chain" -v b="$secs" 'BEGIN { printf "%.3f", a + b }')
         i=$((i + 1))
     done
     input=$(faces "$d/0.ug")
-    merged=$(faces "$d/3.ug")
-    patches=$(faces "$d/4.ug")
-    elements=$(sed -n 's/.*; \([0-9]*\) leaf elements.*/\1/p' "$d/5.err" | tail -1)
-    echo "| $input | $merged | $patches | ${elements:-?} | ${cells[0]} | ${cells[1]} | ${cells[2]} | ${cells[3]} | ${cells[4]} | ${cells[5]} | $chain |"
+    if [ -n "$failed" ]; then
+        row="| $(num "$input") | | | |"
+        for cell in "${cells[@]}"; do row+=" $cell |"; done
+        row+=" $failed failed |"
+        echo "$row"
+        prev_chain=
+        continue
+    fi
+    cleaned=$(faces "$d/6.ug")
+    patches=$(faces "$d/7.ug")
+    elements=$(sed -n 's/.*; \([0-9]*\) leaf elements.*/\1/p' "$d/8.err" | tail -1)
+    # ugrad -v: "time: read R s, mesh and set-up S s, solve T s (N shots, M ms per shot), write W s"
+    setup=$(sed -n 's/^time: read \([0-9.]*\) s, mesh and set-up \([0-9.]*\) s.*/\1 \2/p' "$d/8.err" | awk '{ printf "%.2f", $1 + $2 }')
+    ms=$(sed -n 's/^time: .*, \([0-9.]*\) ms per shot.*/\1/p' "$d/8.err")
+    row="| $(num "$input") | $(num "$cleaned") | $(num "$patches") | $(num "${elements:-?}") |"
+    for cell in "${cells[@]}"; do row+=" $cell |"; done
+    row+=" ${setup:-?} | ${ms:-?} | $chain |"
+    echo "$row"
+    g_faces+=("$input")
+    g_elems+=("${elements:-0}")
+    g_times+=("${times[*]}")
+    g_ms+=("${ms:-0}")
     prev_chain=$chain
-    if [ "${KEEP:-0}" != 1 ]; then rm -f "$d"/[0-4].ug; fi
+    if [ "${KEEP:-0}" != 1 ]; then rm -f "$d"/[0-8].ug; fi
 done
+
+# Growth: (time ratio) / (size ratio), size = input faces.
+if [ "${#g_faces[@]}" -ge 2 ]; then
+    echo
+    echo "Growth from one size to the next: (time ratio) / (input-face ratio); 1 is linear, about the face ratio is quadratic."
+    echo
+    header="| faces | face ratio |"
+    rule="|---|---:|"
+    for nm in "${names[@]}"; do
+        header+=" $nm |"
+        rule+="---:|"
+    done
+    header+=" chain | ugrad ms / shot (per face ratio; per leaf-element ratio) |"
+    rule+="---:|---:|"
+    echo "$header"
+    echo "$rule"
+    for ((j = 1; j < ${#g_faces[@]}; j++)); do
+        a=${g_faces[j - 1]}
+        b=${g_faces[j]}
+        read -r -a ta <<<"${g_times[j - 1]}"
+        read -r -a tb <<<"${g_times[j]}"
+        r=$(awk -v a="$a" -v b="$b" 'BEGIN { printf "%.2f", b / a }')
+        row="| $(num "$a") → $(num "$b") | $r |"
+        ca=0
+        cb=0
+        for ((s = 0; s < ${#names[@]}; s++)); do
+            row+=" $(awk -v x="${ta[s]}" -v y="${tb[s]}" -v r="$r" 'BEGIN { if (x < 0.05) print "–"; else printf "%.2f", (y / x) / r }') |"
+            ca=$(awk -v c="$ca" -v x="${ta[s]}" 'BEGIN { print c + x }')
+            cb=$(awk -v c="$cb" -v x="${tb[s]}" 'BEGIN { print c + x }')
+        done
+        row+=" $(awk -v x="$ca" -v y="$cb" -v r="$r" 'BEGIN { printf "%.2f", (y / x) / r }') |"
+        row+=" $(awk -v x="${g_ms[j - 1]}" -v y="${g_ms[j]}" -v r="$r" -v ea="${g_elems[j - 1]}" -v eb="${g_elems[j]}" \
+            'BEGIN { if (x <= 0 || ea <= 0) print "–"; else printf "%.2f; %.2f (elements ×%.2f)", (y / x) / r, (y / x) / (eb / ea), eb / ea }') |"
+        echo "$row"
+    done
+fi

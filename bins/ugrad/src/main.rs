@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use clap::{Parser, ValueEnum};
 
@@ -152,11 +152,22 @@ fn main() -> std::process::ExitCode {
     let args = Args::parse();
     cli::run(|| {
         let c = &args.common;
+        let t_start = Instant::now();
         let mut model = c.load_flat()?;
+        let t_read = t_start.elapsed();
         let rss_input = memory_kb("VmRSS");
         let eps = cli::epsilon(args.epsilon, &model);
         let mesh = libmesh::Mesh::from_model(&model, eps)
             .map_err(|e| cli::Failure::input(format!("error: {e}")))?;
+        if !c.quiet {
+            let d = mesh.degenerate_faces();
+            for (face, reason) in d.iter().take(5) {
+                eprintln!("warning: face {face}: {reason}; left out (it has no area to light)");
+            }
+            if d.len() > 5 {
+                eprintln!("warning: {} more degenerate faces left out", d.len() - 5);
+            }
+        }
         let backend = match args.gpu_backend {
             BackendArg::Auto => gpu::Backend::Auto,
             BackendArg::Vulkan => gpu::Backend::Vulkan,
@@ -289,6 +300,8 @@ fn main() -> std::process::ExitCode {
         ));
         let bar = c.progress(1000, "unshot energy");
         let verbose = c.verbose > 0;
+        let t_solve = Instant::now();
+        let t_setup = t_start.elapsed() - t_read;
         let stop = solver.solve(Some(interrupt), |s| {
             if verbose {
                 bar.suspend(|| {
@@ -302,6 +315,7 @@ fn main() -> std::process::ExitCode {
             bar.set_position(done as u64);
         });
         bar.finish_and_clear();
+        let t_solve = t_solve.elapsed();
         if !c.quiet {
             match stop {
                 radiosity::Stop::Dark => {
@@ -338,7 +352,18 @@ fn main() -> std::process::ExitCode {
         }
         // Streamed: the output model and its text are never held in memory.
         solver.release_scratch();
+        let t_write = Instant::now();
         cli::write_streamed(c.output.as_deref(), |w| solver.write_ug(&model, w))?;
+        // Timings (wall clock): for benches/pipeline.sh and docs/performance.md.
+        c.verbose(format!(
+            "time: read {:.3} s, mesh and set-up {:.3} s, solve {:.3} s ({} shots, {:.2} ms per shot), write {:.3} s",
+            t_read.as_secs_f64(),
+            t_setup.as_secs_f64(),
+            t_solve.as_secs_f64(),
+            solver.shots.len(),
+            1e3 * t_solve.as_secs_f64() / solver.shots.len().max(1) as f64,
+            t_write.elapsed().as_secs_f64()
+        ));
         if let (Some(input), Some(peak)) = (rss_input, memory_kb("VmHWM")) {
             let leaves = solver.mesh.num_leaves().max(1) as f64;
             c.verbose(format!(
