@@ -215,13 +215,14 @@ pub fn write_streamed(
                 .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
             let tmp = dir.join(format!(".{file_name}.{}.tmp", std::process::id()));
             let mut opts = std::fs::OpenOptions::new();
+            // Created with the default mode (0666 less the umask), like any
+            // file a shell redirection makes; a file being replaced keeps
+            // its permissions.
             opts.write(true).create_new(true);
-            #[cfg(unix)]
-            {
-                use std::os::unix::fs::OpenOptionsExt;
-                opts.mode(0o600);
-            }
             let file = opts.open(&tmp).map_err(|e| fail(&e))?;
+            if let Ok(old) = std::fs::metadata(p) {
+                let _ = file.set_permissions(old.permissions());
+            }
             let result = (|| {
                 let mut w = io::BufWriter::with_capacity(1 << 16, file);
                 body(&mut w)?;
@@ -296,6 +297,15 @@ mod tests {
         assert_eq!(std::fs::read_to_string(&f).unwrap(), "new");
         // No temporary file is left behind.
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+        #[cfg(unix)]
+        {
+            // A replaced file keeps its permissions.
+            use std::os::unix::fs::PermissionsExt;
+            std::fs::set_permissions(&f, std::fs::Permissions::from_mode(0o640)).unwrap();
+            write_output(Some(&f), b"newer").unwrap();
+            let mode = std::fs::metadata(&f).unwrap().permissions().mode() & 0o777;
+            assert_eq!(mode, 0o640);
+        }
         std::fs::remove_dir_all(&dir).unwrap();
         #[cfg(unix)]
         {
