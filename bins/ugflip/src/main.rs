@@ -83,7 +83,10 @@ fn main() -> std::process::ExitCode {
             ))
         })?;
         if !c.quiet {
-            for a in &r.ambiguous {
+            // One line per part up to a limit (all of them with -v): a big
+            // messy building can have thousands.
+            let limit = if c.verbose > 0 { usize::MAX } else { 20 };
+            for a in r.ambiguous.iter().take(limit) {
                 eprintln!(
                     "warning: the outside of the part containing face {a} is ambiguous; left as it is{}",
                     if args.double_sided_ambiguous {
@@ -91,6 +94,12 @@ fn main() -> std::process::ExitCode {
                     } else {
                         " (--double-sided-ambiguous makes it two-sided)"
                     }
+                );
+            }
+            if r.ambiguous.len() > limit {
+                eprintln!(
+                    "warning: {} more parts are ambiguous (-v lists them all)",
+                    r.ambiguous.len() - limit
                 );
             }
             for a in &r.nonorientable {
