@@ -145,33 +145,28 @@ pub fn render(g: &Gpu, scene: &Scene, cam: &Camera, o: &RenderOptions) -> Result
         step_mode: wgpu::VertexStepMode::Vertex,
         attributes: &attrs,
     };
-    let ms = wgpu::MultisampleState {
-        count: o.msaa,
-        mask: !0,
-        alpha_to_coverage_enabled: false,
-    };
-    let targets_surface = [
-        Some(wgpu::ColorTargetState {
-            format: HDR_FORMAT,
-            blend: None,
-            write_mask: wgpu::ColorWrites::ALL,
-        }),
-        Some(wgpu::ColorTargetState {
-            format: OVERLAY_FORMAT,
-            blend: None,
-            write_mask: wgpu::ColorWrites::ALL,
-        }),
-    ];
-    let surface = dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("surfaces"),
-        layout: Some(&layout),
-        vertex: wgpu::VertexState {
+    let pipe = |label, vertex, fragment, primitive, depth| {
+        g.render_pipeline(gpu::Pipeline {
+            label,
+            layout: &layout,
             module: &module,
-            entry_point: Some("vs_surface"),
-            compilation_options: Default::default(),
-            buffers: &[Some(vlayout.clone())],
-        },
-        primitive: wgpu::PrimitiveState {
+            vertex,
+            buffer: vlayout.clone(),
+            fragment: Some(fragment),
+            primitive,
+            depth,
+            samples: o.msaa,
+        })
+    };
+    let surface_targets = [
+        gpu::target(HDR_FORMAT, true),
+        gpu::target(OVERLAY_FORMAT, true),
+    ];
+    let surface = pipe(
+        "surfaces",
+        "vs_surface",
+        ("fs_surface", &surface_targets),
+        wgpu::PrimitiveState {
             topology: wgpu::PrimitiveTopology::TriangleList,
             front_face: wgpu::FrontFace::Ccw,
             cull_mode: if o.backfaces {
@@ -181,65 +176,33 @@ pub fn render(g: &Gpu, scene: &Scene, cam: &Camera, o: &RenderOptions) -> Result
             },
             ..Default::default()
         },
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: ms,
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs_surface"),
-            compilation_options: Default::default(),
-            targets: &targets_surface,
-        }),
-        multiview_mask: None,
-        cache: None,
-    });
-    let targets_line = [
-        Some(wgpu::ColorTargetState {
-            format: HDR_FORMAT,
-            blend: None,
-            write_mask: wgpu::ColorWrites::empty(),
-        }),
-        Some(wgpu::ColorTargetState {
-            format: OVERLAY_FORMAT,
-            blend: None,
-            write_mask: wgpu::ColorWrites::ALL,
-        }),
+        gpu::depth_test(
+            DEPTH_FORMAT,
+            true,
+            wgpu::CompareFunction::Less,
+            Default::default(),
+        ),
+    );
+    // Lines leave the HDR target alone and draw into the overlay.
+    let line_targets = [
+        gpu::target(HDR_FORMAT, false),
+        gpu::target(OVERLAY_FORMAT, true),
     ];
-    let lines = dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("mesh lines"),
-        layout: Some(&layout),
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs_line"),
-            compilation_options: Default::default(),
-            buffers: &[Some(vlayout)],
-        },
-        primitive: wgpu::PrimitiveState {
+    let lines = pipe(
+        "mesh lines",
+        "vs_line",
+        ("fs_line", &line_targets),
+        wgpu::PrimitiveState {
             topology: wgpu::PrimitiveTopology::LineList,
             ..Default::default()
         },
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(false),
-            depth_compare: Some(wgpu::CompareFunction::LessEqual),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: ms,
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs_line"),
-            compilation_options: Default::default(),
-            targets: &targets_line,
-        }),
-        multiview_mask: None,
-        cache: None,
-    });
+        gpu::depth_test(
+            DEPTH_FORMAT,
+            false,
+            wgpu::CompareFunction::LessEqual,
+            Default::default(),
+        ),
+    );
     g.check()?;
 
     let tex =

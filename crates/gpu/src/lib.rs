@@ -256,6 +256,36 @@ impl Gpu {
         Ok(m)
     }
 
+    /// Creates a render pipeline (errors are captured, see [`Gpu::check`]).
+    pub fn render_pipeline(&self, p: Pipeline<'_>) -> wgpu::RenderPipeline {
+        self.device
+            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(p.label),
+                layout: Some(p.layout),
+                vertex: wgpu::VertexState {
+                    module: p.module,
+                    entry_point: Some(p.vertex),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(p.buffer)],
+                },
+                primitive: p.primitive,
+                depth_stencil: p.depth,
+                multisample: wgpu::MultisampleState {
+                    count: p.samples,
+                    mask: !0,
+                    alpha_to_coverage_enabled: false,
+                },
+                fragment: p.fragment.map(|(entry, targets)| wgpu::FragmentState {
+                    module: p.module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+    }
+
     /// A 2-D texture of one mip level.
     pub fn texture_2d(
         &self,
@@ -368,6 +398,51 @@ impl Gpu {
         }
         Ok(out)
     }
+}
+
+/// A render pipeline with one vertex buffer, as the toolkit's passes use.
+pub struct Pipeline<'a> {
+    pub label: &'a str,
+    pub layout: &'a wgpu::PipelineLayout,
+    pub module: &'a wgpu::ShaderModule,
+    /// Vertex entry point.
+    pub vertex: &'a str,
+    pub buffer: wgpu::VertexBufferLayout<'a>,
+    /// Fragment entry point and its colour targets; `None` for depth only.
+    pub fragment: Option<(&'a str, &'a [Option<wgpu::ColorTargetState>])>,
+    pub primitive: wgpu::PrimitiveState,
+    pub depth: Option<wgpu::DepthStencilState>,
+    /// Samples per pixel (1 without multisampling).
+    pub samples: u32,
+}
+
+/// A depth test: `format`, whether it writes depth, its comparison and bias.
+pub fn depth_test(
+    format: wgpu::TextureFormat,
+    write: bool,
+    compare: wgpu::CompareFunction,
+    bias: wgpu::DepthBiasState,
+) -> Option<wgpu::DepthStencilState> {
+    Some(wgpu::DepthStencilState {
+        format,
+        depth_write_enabled: Some(write),
+        depth_compare: Some(compare),
+        stencil: Default::default(),
+        bias,
+    })
+}
+
+/// One colour target without blending, written (`write`) or left alone.
+pub fn target(format: wgpu::TextureFormat, write: bool) -> Option<wgpu::ColorTargetState> {
+    Some(wgpu::ColorTargetState {
+        format,
+        blend: None,
+        write_mask: if write {
+            wgpu::ColorWrites::ALL
+        } else {
+            wgpu::ColorWrites::empty()
+        },
+    })
 }
 
 /// A colour attachment: cleared to `clear` (else loaded), stored, and

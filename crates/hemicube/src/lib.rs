@@ -197,13 +197,7 @@ fn depth_state(
     compare: wgpu::CompareFunction,
     bias: wgpu::DepthBiasState,
 ) -> Option<wgpu::DepthStencilState> {
-    Some(wgpu::DepthStencilState {
-        format: DEPTH_FORMAT,
-        depth_write_enabled: Some(write),
-        depth_compare: Some(compare),
-        stencil: Default::default(),
-        bias,
-    })
+    gpu::depth_test(DEPTH_FORMAT, write, compare, bias)
 }
 
 impl Hemicube {
@@ -414,47 +408,36 @@ impl Hemicube {
             topology: wgpu::PrimitiveTopology::PointList,
             ..Default::default()
         };
-        let depth_pipeline = dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("hemicube depth"),
-            layout: Some(&render_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_depth"),
-                compilation_options: Default::default(),
-                buffers: &[Some(vlayout.clone())],
-            },
-            primitive: tri,
-            depth_stencil: depth_state(true, wgpu::CompareFunction::Greater, SURFACE_BIAS),
-            multisample: Default::default(),
-            fragment: None,
-            multiview_mask: None,
-            cache: None,
-        });
-        let id_pipeline = dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("hemicube surface ids"),
-            layout: Some(&render_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_depth"),
-                compilation_options: Default::default(),
-                buffers: &[Some(vlayout.clone())],
-            },
-            primitive: tri,
-            depth_stencil: depth_state(true, wgpu::CompareFunction::Greater, Default::default()),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_id"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: ID_FORMAT,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipe = |label, module, vertex, fragment, primitive, depth| {
+            g.render_pipeline(gpu::Pipeline {
+                label,
+                layout: &render_layout,
+                module,
+                vertex,
+                buffer: vlayout.clone(),
+                fragment,
+                primitive,
+                depth,
+                samples: 1,
+            })
+        };
+        let depth_pipeline = pipe(
+            "hemicube depth",
+            &module,
+            "vs_depth",
+            None,
+            tri,
+            depth_state(true, wgpu::CompareFunction::Greater, SURFACE_BIAS),
+        );
+        let id_target = [gpu::target(ID_FORMAT, true)];
+        let id_pipeline = pipe(
+            "hemicube surface ids",
+            &module,
+            "vs_depth",
+            Some(("fs_id", &id_target)),
+            tri,
+            depth_state(true, wgpu::CompareFunction::Greater, Default::default()),
+        );
         let test_pipeline = dev.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("hemicube test"),
             layout: Some(&compute_layout),
@@ -488,30 +471,20 @@ impl Hemicube {
                 bind_group_layouts: &[Some(&bgl0), Some(&bgl)],
                 immediate_size: 0,
             });
-            let pipeline = dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("hemicube points"),
-                layout: Some(&layout),
-                vertex: wgpu::VertexState {
-                    module: &pmod,
-                    entry_point: Some("vs_point"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(vlayout.clone())],
-                },
+            let pipeline = g.render_pipeline(gpu::Pipeline {
+                label: "hemicube points",
+                layout: &layout,
+                module: &pmod,
+                vertex: "vs_point",
+                buffer: vlayout.clone(),
+                fragment: Some(("fs_point", &[])),
                 primitive: pts,
-                depth_stencil: depth_state(
+                depth: depth_state(
                     false,
                     wgpu::CompareFunction::GreaterEqual,
                     Default::default(),
                 ),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &pmod,
-                    entry_point: Some("fs_point"),
-                    compilation_options: Default::default(),
-                    targets: &[],
-                }),
-                multiview_mask: None,
-                cache: None,
+                samples: 1,
             });
             Some(PointsPipes { pipeline, bgl })
         } else {
@@ -519,48 +492,17 @@ impl Hemicube {
         };
         let decal = if opts.method == Method::Decal {
             let dmod = g.shader("decal.wgsl", DECAL_SHADER)?;
-            let target = |write| {
-                [Some(wgpu::ColorTargetState {
-                    format: ID_FORMAT,
-                    blend: None,
-                    write_mask: if write {
-                        wgpu::ColorWrites::ALL
-                    } else {
-                        wgpu::ColorWrites::empty()
-                    },
-                })]
-            };
-            let (t_on, t_off) = (target(true), target(false));
-            let pipe = |label, vs, fs, prim, depth, targets: &[Option<wgpu::ColorTargetState>]| {
-                dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(label),
-                    layout: Some(&render_layout),
-                    vertex: wgpu::VertexState {
-                        module: &dmod,
-                        entry_point: Some(vs),
-                        compilation_options: Default::default(),
-                        buffers: &[Some(vlayout.clone())],
-                    },
-                    primitive: prim,
-                    depth_stencil: depth,
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &dmod,
-                        entry_point: Some(fs),
-                        compilation_options: Default::default(),
-                        targets,
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                })
-            };
+            let (t_on, t_off) = (
+                [gpu::target(ID_FORMAT, true)],
+                [gpu::target(ID_FORMAT, false)],
+            );
             let surface = pipe(
                 "decal surface colour",
+                &dmod,
                 "vs_surface",
-                "fs_surface",
+                Some(("fs_surface", &t_on)),
                 tri,
                 depth_state(false, wgpu::CompareFunction::Greater, SURFACE_BIAS),
-                &t_on,
             );
             // The points write their depth (nudged a hair nearer than their
             // surface), so that a surface drawn later erases a vertex's id
@@ -568,23 +510,23 @@ impl Hemicube {
             // meets it along an edge.
             let points = pipe(
                 "decal points",
+                &dmod,
                 "vs_point",
-                "fs_point",
+                Some(("fs_point", &t_on)),
                 pts,
                 depth_state(
                     true,
                     wgpu::CompareFunction::GreaterEqual,
                     Default::default(),
                 ),
-                &t_on,
             );
             let depth = pipe(
                 "decal surface depth",
+                &dmod,
                 "vs_surface",
-                "fs_surface",
+                Some(("fs_surface", &t_off)),
                 tri,
                 depth_state(true, wgpu::CompareFunction::Greater, SURFACE_BIAS),
-                &t_off,
             );
             let id_tex = tex(
                 "hemicube ids",
