@@ -55,7 +55,8 @@ pub fn copl(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
         others[i].push(j);
         others[j].push(i);
     }
-    let mesh = winged::Mesh::from_model(m.clone());
+    // Built only when a face is cut (for the origin surface's area).
+    let mesh = std::cell::OnceCell::new();
     let mut order = vec![usize::MAX; m.faces.len()];
     for (k, &f) in faces.iter().enumerate() {
         order[f.idx()] = k;
@@ -97,7 +98,11 @@ pub fn copl(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
         let base = face.name.clone().unwrap_or_else(|| format!("f{}", k + 1));
         let note = format!(
             "ugcopl origin {base} area {}",
-            ugclean::surface_area(&mesh, *f, eps)
+            ugclean::surface_area(
+                mesh.get_or_init(|| winged::Mesh::from_model(m.clone())),
+                *f,
+                eps
+            )
         );
         stats.pieces += rb.pieces(
             face,
