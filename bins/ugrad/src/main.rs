@@ -12,7 +12,8 @@ Examples:
   ugrad --converge 1e-4 -v patches.ug -o lit.ug      tighter, with per-shot statistics
   ugrad --max-shots 50 --ambient patches.ug          a quick preview with an ambient term
   ugrad --gradient 0.05 --min-edge 0.02 patches.ug   finer adaptive subdivision
-  ugrad --output irradiance patches.ug               write H instead of B";
+  ugrad --output irradiance patches.ug               write H instead of B
+  ugrad --tail 0 patches.ug                          shoot patch by patch to the end (no tail)";
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
 enum OutputKind {
@@ -92,6 +93,18 @@ struct Args {
     /// Add a display ambient term for the energy not yet shot.
     #[arg(long)]
     ambient: bool,
+    /// Once every emitter has shot and no patch carries more than this
+    /// fraction of the unshot energy, move the rest patch to patch corner in
+    /// one linear solve (the indirect tail: reflected light at patch
+    /// resolution, every patch shooting at once). 0: shoot one patch at a
+    /// time to the end.
+    #[arg(long, default_value_t = 5e-3, value_name = "FRACTION", value_parser = fraction)]
+    tail: f64,
+    /// Rays from each patch corner that find the patches it sees in the
+    /// tail; 0 tries every patch (default: 0 while corners × patches ≤ 4e6,
+    /// else 256).
+    #[arg(long, value_name = "N")]
+    tail_rays: Option<usize>,
     /// How visibility is decided. auto: the hemi-cube on a hardware GPU,
     /// else ray casting (on a software rasteriser such as lavapipe the CPU
     /// ray caster is faster).
@@ -262,6 +275,8 @@ fn main() -> std::process::ExitCode {
                 OutputKind::Irradiance => radiosity::Output::Irradiance,
             },
             ambient: args.ambient,
+            tail: args.tail,
+            tail_rays: args.tail_rays,
             ..radiosity::Options::default()
         };
         let interrupt = Arc::new(AtomicBool::new(false));
@@ -327,12 +342,31 @@ fn main() -> std::process::ExitCode {
                 _ => {}
             }
         }
+        if let Some(t) = &solver.tail {
+            c.verbose(format!(
+                "indirect tail after shot {}: {} patch corners, {} pairs ({:.1} MB; {}), {} iterations; unshot {:.3e} -> {:.3e}; {:.2} s to build, {:.3} s to iterate",
+                t.after_shots,
+                t.receivers,
+                t.pairs,
+                t.bytes as f64 / 1e6,
+                if t.rays == 0 {
+                    "every patch tried".to_string()
+                } else {
+                    format!("{} rays per corner", t.rays)
+                },
+                t.iterations,
+                t.unshot_before,
+                t.unshot_after,
+                t.build_seconds,
+                t.iterate_seconds
+            ));
+        }
         c.verbose(format!(
             "stopped ({stop:?}) after {} shots; {} leaf elements, {} vertices; unshot {:.3e} of the emitted energy",
             solver.shots.len(),
             solver.mesh.num_leaves(),
             solver.mesh.num_vertices(),
-            solver.shots.last().map_or(1.0, |s| s.unshot)
+            solver.unshot_fraction()
         ));
         if let Some(h) = &hc {
             let st = h.stats();

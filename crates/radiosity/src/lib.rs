@@ -10,7 +10,8 @@
 
 pub mod formfactor;
 pub mod solver;
+mod tail;
 pub mod visibility;
 
-pub use solver::{Options, Output, ShotStats, Solver, Stop};
+pub use solver::{Options, Output, ShotStats, Solver, Stop, TailStats};
 pub use visibility::{RayVisibility, Visibility};

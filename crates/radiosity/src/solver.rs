@@ -72,6 +72,14 @@ pub struct Options {
     /// Distance below which a receiver is moved in front of the shooter's
     /// plane (§5.4), as a fraction of the shooter's longest edge.
     pub offset: f64,
+    /// Hand the remaining light to the indirect tail (`tail.rs`) once every
+    /// emitter has shot and the brightest patch carries at most this
+    /// fraction of the unshot energy (0: never; shoot progressively to the end).
+    pub tail: f64,
+    /// Rays per patch corner that find the patches it sees in the tail
+    /// (`Some(0)`: try every patch; `None`: every patch while corners ×
+    /// patches ≤ 4·10⁶, else 256).
+    pub tail_rays: Option<usize>,
 }
 
 impl Default for Options {
@@ -88,6 +96,8 @@ impl Default for Options {
             output: Output::Radiosity,
             ambient: false,
             offset: 1e-6,
+            tail: 5e-3,
+            tail_rays: None,
         }
     }
 }
@@ -126,6 +136,39 @@ pub struct ShotStats {
     pub unshot: f64,
 }
 
+/// What the indirect tail did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TailStats {
+    /// After this many shots.
+    pub after_shots: usize,
+    /// Patch corners that received.
+    pub receivers: usize,
+    /// Stored (patch, corner) pairs with F·V > 0.
+    pub pairs: usize,
+    /// Rays per corner that found its patches (0: every patch tried).
+    pub rays: usize,
+    /// Jacobi iterations (all patches shooting at once).
+    pub iterations: usize,
+    /// Unshot energy (fraction of the emitted) before and after.
+    pub unshot_before: f64,
+    pub unshot_after: f64,
+    pub build_seconds: f64,
+    pub iterate_seconds: f64,
+    /// Heap bytes of the transport while it existed.
+    pub bytes: usize,
+}
+
+/// How the tail ended.
+enum TailEnd {
+    Converged,
+    NotConverged,
+    Stopped(Stop),
+}
+
+/// At most this many tail iterations (ρ near 1 in a closed scene converges
+/// slowly; the progressive loop takes over after them).
+const TAIL_ITERATIONS: usize = 10_000;
+
 /// A progressive radiosity solution in progress.
 pub struct Solver<'v> {
     pub mesh: Mesh,
@@ -148,6 +191,8 @@ pub struct Solver<'v> {
     gradient: f64,
     min_edge: f64,
     pub shots: Vec<ShotStats>,
+    /// The indirect tail, once it has run.
+    pub tail: Option<TailStats>,
 }
 
 impl<'v> Solver<'v> {
@@ -216,6 +261,7 @@ impl<'v> Solver<'v> {
             gradient,
             min_edge,
             shots: Vec::new(),
+            tail: None,
         }
     }
 
@@ -308,6 +354,17 @@ impl<'v> Solver<'v> {
             let total: f64 = energies.iter().map(|e| e.0).sum();
             if total <= self.opts.converge * self.emitted {
                 return Stop::Converged;
+            }
+            if self.tail.is_none() && self.opts.tail > 0.0 {
+                let max = energies.iter().map(|e| e.0).fold(0.0, f64::max);
+                if max <= self.opts.tail * total && self.emitters_shot() {
+                    let deadline = self.opts.time_limit.map(|t| start + t);
+                    match self.run_tail(interrupt.clone(), deadline) {
+                        TailEnd::Converged => return Stop::Converged,
+                        TailEnd::Stopped(s) => return s,
+                        TailEnd::NotConverged => continue,
+                    }
+                }
             }
             energies.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
             for &(_, p) in energies.iter().take(self.opts.batch.max(1)) {
@@ -477,6 +534,160 @@ impl<'v> Solver<'v> {
         };
         self.shots.push(stats.clone());
         Some(stats)
+    }
+
+    /// Whether every emitting patch has shot at least its emitted energy.
+    fn emitters_shot(&self) -> bool {
+        self.mesh.patches().all(|p| {
+            let e = sum(self.emit[self.mesh.patch_surface(p).idx()]) * self.mesh.patch_area(p);
+            e <= 0.0 || sum(self.shot[p.idx()]) >= e * (1.0 - 1e-9)
+        })
+    }
+
+    /// Runs the indirect tail (`tail.rs`) on all unshot energy and adds its
+    /// irradiance to every vertex.
+    fn run_tail(
+        &mut self,
+        interrupt: Option<Arc<AtomicBool>>,
+        deadline: Option<Instant>,
+    ) -> TailEnd {
+        let t0 = Instant::now();
+        let np = self.mesh.num_patches();
+        let rays = self.opts.tail_rays.unwrap_or_else(|| {
+            let corners = (0..self.mesh.num_vertices())
+                .filter(|&v| {
+                    matches!(
+                        self.mesh.vertex_origin(VertId(v as u32)),
+                        libmesh::VertexOrigin::Input(_)
+                    )
+                })
+                .count();
+            if (corners as f64) * (np as f64) <= 4e6 {
+                0
+            } else {
+                256
+            }
+        });
+        let stopped = |i: &Option<Arc<AtomicBool>>| {
+            if i.as_ref().is_some_and(|i| i.load(Ordering::Relaxed)) {
+                Stop::Interrupted
+            } else {
+                Stop::TimeLimit
+            }
+        };
+        // The shot scratch array is not needed meanwhile (a later shot regrows it).
+        self.gain = Vec::new();
+        let cancel = crate::tail::canceller(interrupt.clone(), deadline);
+        let Some(tr) = crate::tail::Transport::build(&self.mesh, self.opts.offset, rays, &cancel)
+        else {
+            self.tail = Some(TailStats {
+                after_shots: self.shots.len(),
+                rays,
+                ..Default::default()
+            });
+            return TailEnd::Stopped(stopped(&interrupt));
+        };
+        let build_seconds = t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        let area: Vec<f64> = self
+            .mesh
+            .patches()
+            .map(|p| self.mesh.patch_area(p))
+            .collect();
+        let rho: Vec<Rgb> = self
+            .mesh
+            .patches()
+            .map(|p| self.rho[self.mesh.patch_surface(p).idx()])
+            .collect();
+        let mut u: Vec<Rgb> = (0..np)
+            .into_par_iter()
+            .map(|p| scale(self.unshot(PatchId(p as u32)), 1.0 / area[p]))
+            .collect();
+        let fraction =
+            |u: &[Rgb]| u.iter().zip(&area).map(|(b, a)| sum(*b) * a).sum::<f64>() / self.emitted;
+        let before = fraction(&u);
+        let mut remaining = before;
+        let mut total = vec![[0.0; 3]; tr.recv.len()];
+        let mut iterations = 0;
+        let end = loop {
+            if remaining <= self.opts.converge {
+                break TailEnd::Converged;
+            }
+            if iterations >= TAIL_ITERATIONS {
+                break TailEnd::NotConverged;
+            }
+            if cancel() {
+                break TailEnd::Stopped(stopped(&interrupt));
+            }
+            let dh = tr.gather(&u);
+            for (t, d) in total.iter_mut().zip(&dh) {
+                *t = add(*t, *d);
+            }
+            u = (0..np)
+                .into_par_iter()
+                .map(|p| {
+                    let c = tr.corners(PatchId(p as u32));
+                    let mut m = [0.0; 3];
+                    for &r in c {
+                        if r != crate::tail::NO_RECEIVER {
+                            m = add(m, dh[r as usize]);
+                        }
+                    }
+                    let m = scale(m, 1.0 / c.len() as f64);
+                    [m[0] * rho[p][0], m[1] * rho[p][1], m[2] * rho[p][2]]
+                })
+                .collect();
+            remaining = fraction(&u);
+            iterations += 1;
+        };
+        let (receivers, pairs, bytes) = (tr.recv.len(), tr.pairs(), tr.heap_bytes());
+        let recv = tr.recv.clone();
+        drop(tr);
+        // Every vertex: a corner its own total, a split vertex the mean of its parents'.
+        let nv = self.mesh.num_vertices();
+        let mut t_all: Vec<Rgb> = vec![[0.0; 3]; nv];
+        let mut k = 0;
+        for v in 0..nv {
+            let t = match self.mesh.vertex_origin(VertId(v as u32)) {
+                libmesh::VertexOrigin::Split([a, b]) => {
+                    scale(add(t_all[a.idx()], t_all[b.idx()]), 0.5)
+                }
+                libmesh::VertexOrigin::Input(_) => {
+                    if k < recv.len() && recv[k].idx() == v {
+                        k += 1;
+                        total[k - 1]
+                    } else {
+                        [0.0; 3]
+                    }
+                }
+            };
+            t_all[v] = t;
+            self.h[v] = add(self.h[v], t);
+        }
+        drop(t_all);
+        // What is left unshot is exactly the last iteration's reflection.
+        let shot: Vec<Rgb> = (0..np)
+            .into_par_iter()
+            .map(|p| {
+                let e = self.patch_energy(PatchId(p as u32));
+                let r = scale(u[p], area[p]);
+                [e[0] - r[0], e[1] - r[1], e[2] - r[2]]
+            })
+            .collect();
+        self.shot = shot;
+        self.tail = Some(TailStats {
+            after_shots: self.shots.len(),
+            receivers,
+            pairs,
+            rays,
+            iterations,
+            unshot_before: before,
+            unshot_after: remaining,
+            build_seconds,
+            iterate_seconds: t1.elapsed().as_secs_f64(),
+            bytes,
+        });
+        end
     }
 
     /// Frees the working arrays of a shot (8 bytes per vertex) until the
