@@ -4,8 +4,11 @@
 #
 #   ugbuilding --faces N --messy --seed SEED
 #     | ugplanar | ugvlmerge | ugflip | ugisect | ugcopl | ugclean
-#     | ugcut -l LEN | ugrad -v --visibility ray --max-shots SHOTS
+#     | ugcut -l LEN | ugrad -v --visibility ray --max-shots SHOTS --tail 0
 #
+# and, for sizes up to CONVERGE_MAX input faces (default 10000), ugrad once
+# more from the same patches to convergence (1e-3 unshot energy, with the
+# indirect tail: its defaults),
 # stage by stage, with files in a temporary directory, printing two Markdown
 # tables:
 #
@@ -14,13 +17,17 @@
 #    stage the wall time in seconds and the peak resident memory in MB
 #    (`s / MB`; peak memory only with GNU time at /usr/bin/time, else "–");
 #    ugrad's set-up (reading, meshing, BVH) and its milliseconds per shot
-#    (solve time / shots, from the `time:` line of `ugrad -v`); the chain
-#    total (ugbuilding not included);
+#    (solve time / shots, from the `time:` line of `ugrad -v`; shot by
+#    shot, `--tail 0`, so that every size is measured on the same kind of
+#    shot); the chain total (ugbuilding not included);
 # 2. growth from each size to the next: for every stage, (time ratio) /
 #    (input-face ratio): about 1 for linear growth, about the size ratio
 #    (10 for 10× the faces) for quadratic growth. ms per shot is compared
 #    with the ratio of leaf elements as well. Times under 0.05 s are too
-#    short to compare and give "–".
+#    short to compare and give "–";
+# 3. ugrad to convergence: shots, when the indirect tail started, its
+#    (patch, corner) pairs and iterations, the solve time, the whole run's
+#    wall time and peak memory, and the leaf elements.
 #
 # Usage: benches/pipeline.sh [FACES...]          (default: 1000 10000 100000)
 #
@@ -89,11 +96,12 @@ faces() { grep -c '^f ' "$1" || true; }
 # Thousands separators: 1234567 → 1,234,567.
 num() { printf "%s" "$1" | sed -e ':a' -e 's/\([0-9]\)\([0-9]\{3\}\)\($\|,\)/\1,\2\3/' -e 'ta'; }
 
-stages=(ugplanar ugvlmerge ugflip ugisect ugcopl ugclean "ugcut -l $LEN" "ugrad -v --visibility ray --max-shots $SHOTS${RAD_EPS:+ -e $RAD_EPS}")
+stages=(ugplanar ugvlmerge ugflip ugisect ugcopl ugclean "ugcut -l $LEN" "ugrad -v --visibility ray --max-shots $SHOTS --tail 0${RAD_EPS:+ -e $RAD_EPS}")
 names=(ugplanar ugvlmerge ugflip ugisect ugcopl ugclean ugcut ugrad)
 
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //'), $(free -h | awk '/^Mem:/ { print $2 }') memory, load average $(cut -d' ' -f1-3 /proc/loadavg)" >&2
-echo "chain: ugbuilding --faces N --messy --seed $SEED | ugplanar | ugvlmerge | ugflip | ugisect | ugcopl | ugclean | ugcut -l $LEN | ugrad -v --visibility ray --max-shots $SHOTS${RAD_EPS:+ -e $RAD_EPS}" >&2
+echo "chain: ugbuilding --faces N --messy --seed $SEED | ugplanar | ugvlmerge | ugflip | ugisect | ugcopl | ugclean | ugcut -l $LEN | ugrad -v --visibility ray --max-shots $SHOTS --tail 0${RAD_EPS:+ -e $RAD_EPS}" >&2
+CONVERGE_MAX=${CONVERGE_MAX:-10000}
 if [ -n "$gnu_time" ]; then unit="s / MB"; else unit="s"; fi
 
 echo
@@ -113,6 +121,7 @@ g_faces=()
 g_elems=()
 g_times=()
 g_ms=()
+conv=()
 prev_chain=
 k=0
 for n in "${sizes[@]}"; do
@@ -170,8 +179,31 @@ for n in "${sizes[@]}"; do
     g_times+=("${times[*]}")
     g_ms+=("${ms:-0}")
     prev_chain=$chain
-    if [ "${KEEP:-0}" != 1 ]; then rm -f "$d"/[0-8].ug; fi
+    if [ "$input" -le "$CONVERGE_MAX" ]; then
+        run ugrad "$d/9.err" "$bin/ugrad" -v --visibility ray ${RAD_EPS:+-e $RAD_EPS} -o "$d/9.ug" "$d/7.ug"
+        if [ "$ok" = 1 ]; then
+            # "indirect tail after shot S: C patch corners, P pairs (M MB; …), I iterations; …"
+            tl=$(sed -n 's/^indirect tail after shot \([0-9]*\): [0-9]* patch corners, \([0-9]*\) pairs ([0-9.]* MB; [^)]*), \([0-9]*\) iterations.*/\1 \2 \3/p' "$d/9.err")
+            st=$(sed -n 's/^stopped (\([A-Za-z]*\)) after \([0-9]*\) shots; \([0-9]*\) leaf elements.*unshot \([0-9.e+-]*\) .*/\1 \2 \3 \4/p' "$d/9.err")
+            sv=$(sed -n 's/^time: .*, solve \([0-9.]*\) s.*/\1/p' "$d/9.err")
+            read -r stop shots elems unshot <<<"$st"
+            read -r t_after t_pairs t_iter <<<"${tl:-– – –}"
+            conv+=("| $(num "$input") | $(num "$patches") | ${stop:-?} | $(num "${shots:-?}") | ${unshot:-?} | $t_after | $(num "$t_pairs") | $t_iter | ${sv:-?} | $secs${gnu_time:+ / $peak} | $(num "${elems:-?}") |")
+        else
+            conv+=("| $(num "$input") | $(num "$patches") | failed | | | | | | | | |")
+        fi
+    fi
+    if [ "${KEEP:-0}" != 1 ]; then rm -f "$d"/[0-9].ug; fi
 done
+
+if [ "${#conv[@]}" -gt 0 ]; then
+    echo
+    echo "ugrad to convergence (1e-3, indirect tail at its defaults), on the same patches:"
+    echo
+    echo "| input faces | patches | stop | shots | unshot | tail after shot | tail pairs | tail iterations | solve (s) | ugrad ($unit) | leaf elements |"
+    echo "|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|"
+    for r in "${conv[@]}"; do echo "$r"; done
+fi
 
 # Growth: (time ratio) / (size ratio), size = input faces.
 if [ "${#g_faces[@]}" -ge 2 ]; then

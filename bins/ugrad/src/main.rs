@@ -344,21 +344,23 @@ fn main() -> std::process::ExitCode {
         }
         if let Some(t) = &solver.tail {
             c.verbose(format!(
-                "indirect tail after shot {}: {} patch corners, {} pairs ({:.1} MB; {}), {} iterations; unshot {:.3e} -> {:.3e}; {:.2} s to build, {:.3} s to iterate",
+                "indirect tail after shot {}: {} patch centres ({} pairs stored, {:.1} MB with the geometry; {}), {} iterations; unshot {:.3e} -> {:.3e}; {} corners gathered; {:.2} s to build, {:.3} s to iterate, {:.2} s for the corners",
                 t.after_shots,
-                t.receivers,
+                solver.mesh.num_patches(),
                 t.pairs,
                 t.bytes as f64 / 1e6,
                 if t.rays == 0 {
                     "every patch tried".to_string()
                 } else {
-                    format!("{} rays per corner", t.rays)
+                    format!("{} rays per point", t.rays)
                 },
                 t.iterations,
                 t.unshot_before,
                 t.unshot_after,
+                t.receivers,
                 t.build_seconds,
-                t.iterate_seconds
+                t.iterate_seconds,
+                t.corner_seconds
             ));
         }
         c.verbose(format!(

@@ -141,19 +141,21 @@ pub struct ShotStats {
 pub struct TailStats {
     /// After this many shots.
     pub after_shots: usize,
-    /// Patch corners that received.
+    /// Patch corners that received (once, at the end).
     pub receivers: usize,
-    /// Stored (patch, corner) pairs with F·V > 0.
+    /// Stored (shooting patch, receiving patch centre) pairs with F·V > 0.
     pub pairs: usize,
-    /// Rays per corner that found its patches (0: every patch tried).
+    /// Rays per receiving point that found its patches (0: every patch tried).
     pub rays: usize,
     /// Jacobi iterations (all patches shooting at once).
     pub iterations: usize,
     /// Unshot energy (fraction of the emitted) before and after.
     pub unshot_before: f64,
     pub unshot_after: f64,
+    /// Building the stored rows, iterating, and the corners' final gather.
     pub build_seconds: f64,
     pub iterate_seconds: f64,
+    pub corner_seconds: f64,
     /// Heap bytes of the transport while it existed.
     pub bytes: usize,
 }
@@ -607,7 +609,10 @@ impl<'v> Solver<'v> {
             |u: &[Rgb]| u.iter().zip(&area).map(|(b, a)| sum(*b) * a).sum::<f64>() / self.emitted;
         let before = fraction(&u);
         let mut remaining = before;
-        let mut total = vec![[0.0; 3]; tr.recv.len()];
+        // Radiosity each patch has shot during the tail, and the irradiance
+        // its centre has received.
+        let mut shot_b = vec![[0.0; 3]; np];
+        let mut centre_h = vec![[0.0; 3]; np];
         let mut iterations = 0;
         let end = loop {
             if remaining <= self.opts.converge {
@@ -620,38 +625,73 @@ impl<'v> Solver<'v> {
                 break TailEnd::Stopped(stopped(&interrupt));
             }
             let dh = tr.gather(&u);
-            for (t, d) in total.iter_mut().zip(&dh) {
-                *t = add(*t, *d);
+            for (s, b) in shot_b.iter_mut().zip(&u) {
+                *s = add(*s, *b);
             }
-            u = (0..np)
-                .into_par_iter()
-                .map(|p| {
-                    let c = tr.corners(PatchId(p as u32));
-                    let mut m = [0.0; 3];
-                    for &r in c {
-                        if r != crate::tail::NO_RECEIVER {
-                            m = add(m, dh[r as usize]);
-                        }
-                    }
-                    let m = scale(m, 1.0 / c.len() as f64);
-                    [m[0] * rho[p][0], m[1] * rho[p][1], m[2] * rho[p][2]]
-                })
+            for (c, h) in centre_h.iter_mut().zip(&dh) {
+                *c = add(*c, *h);
+            }
+            u = dh
+                .iter()
+                .zip(&rho)
+                .map(|(h, r)| [h[0] * r[0], h[1] * r[1], h[2] * r[2]])
                 .collect();
             remaining = fraction(&u);
             iterations += 1;
         };
-        let (receivers, pairs, bytes) = (tr.recv.len(), tr.pairs(), tr.heap_bytes());
-        let recv = tr.recv.clone();
+        let iterate_seconds = t1.elapsed().as_secs_f64();
+        let (pairs, bytes) = (tr.pairs(), tr.heap_bytes());
+        // The picture: every patch corner gathers once what the patches shot.
+        let t2 = Instant::now();
+        let Some((recv, total)) = tr.corners(&self.mesh, &shot_b, &cancel) else {
+            self.tail = Some(TailStats {
+                after_shots: self.shots.len(),
+                rays,
+                pairs,
+                iterations,
+                unshot_before: before,
+                unshot_after: before,
+                build_seconds,
+                iterate_seconds,
+                bytes,
+                ..Default::default()
+            });
+            return TailEnd::Stopped(stopped(&interrupt));
+        };
         drop(tr);
-        // Every vertex: a corner its own total, a split vertex the mean of its parents'.
+        drop(shot_b);
+        let corner_seconds = t2.elapsed().as_secs_f64();
+        // A split quad patch's centre vertex takes the irradiance its patch
+        // centre received (a fifth sample: between the corners the field is
+        // not bilinear, e.g. brighter at a wall's foot than mid-floor).
         let nv = self.mesh.num_vertices();
+        let mut centre_of: rustc_hash::FxHashMap<u32, u32> = Default::default();
+        for p in self.mesh.patches() {
+            let root = self.mesh.patch_root(p);
+            if self.mesh.elem_corners(root).len() != 4 {
+                continue;
+            }
+            if let Some(ch) = self.mesh.elem_children(root) {
+                let first = self.mesh.elem_corners(ch[0]);
+                if let Some(&c) = first.iter().find(|v| {
+                    ch[1..]
+                        .iter()
+                        .all(|&e| self.mesh.elem_corners(e).contains(v))
+                }) {
+                    centre_of.insert(c.0, p.0);
+                }
+            }
+        }
+        // Every vertex: a corner its own total, a patch centre its centre's,
+        // any other split vertex the mean of its parents'.
         let mut t_all: Vec<Rgb> = vec![[0.0; 3]; nv];
         let mut k = 0;
         for v in 0..nv {
             let t = match self.mesh.vertex_origin(VertId(v as u32)) {
-                libmesh::VertexOrigin::Split([a, b]) => {
-                    scale(add(t_all[a.idx()], t_all[b.idx()]), 0.5)
-                }
+                libmesh::VertexOrigin::Split([a, b]) => match centre_of.get(&(v as u32)) {
+                    Some(&p) => centre_h[p as usize],
+                    None => scale(add(t_all[a.idx()], t_all[b.idx()]), 0.5),
+                },
                 libmesh::VertexOrigin::Input(_) => {
                     if k < recv.len() && recv[k].idx() == v {
                         k += 1;
@@ -665,6 +705,7 @@ impl<'v> Solver<'v> {
             self.h[v] = add(self.h[v], t);
         }
         drop(t_all);
+        let receivers = recv.len();
         // What is left unshot is exactly the last iteration's reflection.
         let shot: Vec<Rgb> = (0..np)
             .into_par_iter()
@@ -684,7 +725,8 @@ impl<'v> Solver<'v> {
             unshot_before: before,
             unshot_after: remaining,
             build_seconds,
-            iterate_seconds: t1.elapsed().as_secs_f64(),
+            iterate_seconds,
+            corner_seconds,
             bytes,
         });
         end

@@ -125,10 +125,14 @@ fn the_tail_gives_e_over_one_minus_rho_in_a_closed_enclosure() {
             (s.unshot_fraction() - t.unshot_after).abs() <= 1e-9,
             "{t:?}"
         );
+        // Shooting patch by patch reaches 2 within 2e-3; the tail's patches
+        // reflect what their centres receive while the shots' leftovers were
+        // measured over their elements, which costs a little more (2.0036
+        // at worst).
         for v in 0..s.mesh.num_vertices() {
             let b = s.radiosity(libmesh::VertId(v as u32));
             for x in b {
-                assert!((x - 2.0).abs() < 2e-3, "rays {rays:?}, vertex {v}: B = {x}");
+                assert!((x - 2.0).abs() < 5e-3, "rays {rays:?}, vertex {v}: B = {x}");
             }
         }
     }
@@ -138,9 +142,9 @@ fn the_tail_gives_e_over_one_minus_rho_in_a_closed_enclosure() {
 /// with a block on the floor (13 surfaces, 1,257 patch corners): the tail
 /// starts right after the lamp has shot (tail fraction 1), so it carries
 /// all of the reflected light. Measured per surface, area-weighted mean
-/// radiosity: every patch tried, walls, floor and ceiling within 0.6%, the
-/// block's sides within 6% (the tail's receivers are patch corners only);
-/// 256 rays find the patches to within 0.5% more; 64 rays miss 4–9%.
+/// radiosity: walls, floor and ceiling within 0.9%, the block's sides
+/// within 5% (reflected light at patch resolution), whether every patch is
+/// tried or 256 rays find them; 64 rays miss 6–8%.
 #[test]
 fn the_tail_agrees_with_shooting_to_the_end_in_a_lit_room() {
     let model = patches(&room(), 0.25);
@@ -186,9 +190,9 @@ fn the_tail_agrees_with_shooting_to_the_end_in_a_lit_room() {
         errors.push((room, all));
     }
     // Every patch tried.
-    assert!(errors[0].0 < 0.008 && errors[0].1 < 0.07, "{errors:?}");
-    // 256 rays: little more than that.
-    assert!(errors[1].0 < 0.015 && errors[1].1 < 0.08, "{errors:?}");
+    assert!(errors[0].0 < 0.012 && errors[0].1 < 0.07, "{errors:?}");
+    // 256 rays: about the same.
+    assert!(errors[1].0 < 0.012 && errors[1].1 < 0.07, "{errors:?}");
     // Fewer rays miss more: the test can tell.
     assert!(errors[2].0 > errors[1].0 + 0.01, "{errors:?}");
 }
