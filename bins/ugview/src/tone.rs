@@ -37,10 +37,13 @@ pub fn auto_exposure(h: &Hdr) -> f64 {
     let mut sum = 0.0;
     let mut n = 0.0;
     // δ keeps black pixels from sending the log average to zero.
+    // Never below zero, never NaN: a negative or non-finite pixel would
+    // make the log average NaN and the whole picture black.
     let lum: Vec<f64> = h
         .rgb
         .iter()
         .map(|c| crate::scene::luminance(c.map(f64::from)))
+        .map(|l| if l.is_finite() { l.max(0.0) } else { 0.0 })
         .collect();
     let counted = |i: usize| h.coverage[i] > 0.5 && h.overlay[i][3] < 0.5;
     let peak = (0..lum.len())
@@ -293,6 +296,18 @@ mod tests {
         h2.rgb[1] = [1000.0; 3];
         h2.coverage[1] = 0.0;
         assert!((auto_exposure(&h2) - 0.18).abs() < 1e-4); // δ = 1e-4 of the peak
+    }
+
+    /// A slightly negative or NaN pixel (MSAA extrapolating a colour past a
+    /// sliver's edge) once made the exposure NaN and the picture black.
+    #[test]
+    fn negative_or_nan_pixels_do_not_spoil_the_exposure() {
+        let mut h = flat(4, 4, 7.0);
+        let want = auto_exposure(&h);
+        h.rgb[3] = [-1.0; 3];
+        h.rgb[5] = [f32::NAN; 3];
+        let e = auto_exposure(&h);
+        assert!(e.is_finite() && e > want, "{e} vs {want}");
     }
 
     #[test]

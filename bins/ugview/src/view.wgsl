@@ -24,8 +24,10 @@ struct VIn {
 
 struct VOut {
     @builtin(position) clip: vec4<f32>,
-    @location(0) colour: vec3<f32>,
-    @location(1) world: vec3<f32>,
+    // Centroid: with multisampling a pixel whose centre lies outside a thin
+    // triangle would otherwise extrapolate the colour (to below zero).
+    @location(0) @interpolate(perspective, centroid) colour: vec3<f32>,
+    @location(1) @interpolate(perspective, centroid) world: vec3<f32>,
     @location(2) @interpolate(flat) normal: vec3<f32>,
 };
 
@@ -74,7 +76,7 @@ fn fs_surface(in: VOut, @builtin(front_facing) front: bool) -> FOut {
         let k = abs(dot(normalize(in.normal), normalize(d)));
         c = c * (0.3 + 0.7 * k);
     }
-    o.hdr = vec4<f32>(c * u.params.x, 1.0);
+    o.hdr = vec4<f32>(max(c, vec3<f32>(0.0)) * u.params.x, 1.0);
     return o;
 }
 
