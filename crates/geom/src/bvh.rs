@@ -263,6 +263,24 @@ pub fn slab(lo: DVec3, hi: DVec3, o: DVec3, inv: DVec3, tmin: f64, tmax: f64) ->
     tn <= tf
 }
 
+/// [`slab`] with the entry parameter: `Some(t)` (the first t ≥ `tmin` in
+/// the box) when the ray meets the box for some t in [tmin, tmax]. Exactly
+/// when `slab` says yes.
+#[inline]
+pub fn slab_entry(lo: DVec3, hi: DVec3, o: DVec3, inv: DVec3, tmin: f64, tmax: f64) -> Option<f64> {
+    let (mut tn, mut tf) = (tmin, tmax);
+    for k in 0..3 {
+        let a = (lo[k] - o[k]) * inv[k];
+        let b = (hi[k] - o[k]) * inv[k];
+        if a.is_nan() || b.is_nan() {
+            continue;
+        }
+        tn = tn.max(a.min(b));
+        tf = tf.min(a.max(b));
+    }
+    (tn <= tf).then_some(tn)
+}
+
 /// Möller–Trumbore: the ray parameter of the hit, if the ray meets the triangle (either side).
 #[inline]
 pub fn ray_triangle(o: DVec3, d: DVec3, t: &Triangle) -> Option<f64> {

@@ -1,7 +1,7 @@
 //! Which vertices a shooter sees: the [`Visibility`] trait and its CPU
 //! ray-cast implementation (the reference, and the fallback without a GPU).
 
-use geom::bvh::{Node, Triangle, build_nodes, ray_triangle, slab};
+use geom::bvh::{Node, Triangle, build_nodes, ray_triangle, slab, slab_entry};
 use glam::DVec3;
 use libmesh::{Mesh, SurfaceId, VertId};
 use rayon::prelude::*;
@@ -119,14 +119,19 @@ impl RayVisibility {
             return false;
         }
         let inv = DVec3::ONE / dir;
+        let root = &self.nodes[0];
+        if !slab(root.lo, root.hi, origin, inv, tmin, tmax) {
+            return false;
+        }
+        // Nearer child first: a ray toward a vertex in another room is
+        // usually stopped by a wall near its start, so the boxes near the
+        // origin are the likely place of a hit. Whether anything is hit
+        // does not depend on the order, so the answers do not change.
         let mut stack = [0u32; 64];
         let mut sp = 1usize;
         while sp > 0 {
             sp -= 1;
             let n = &self.nodes[stack[sp] as usize];
-            if !slab(n.lo, n.hi, origin, inv, tmin, tmax) {
-                continue;
-            }
             if n.count > 0 {
                 for t in &self.tris[n.first as usize..(n.first + n.count) as usize] {
                     if !keep(t.surface) {
@@ -141,9 +146,28 @@ impl RayVisibility {
                 }
             } else {
                 assert!(sp + 2 <= stack.len(), "BVH deeper than its traversal stack");
-                stack[sp] = n.first;
-                stack[sp + 1] = n.first + 1;
-                sp += 2;
+                let (a, b) = (n.first, n.first + 1);
+                let (na, nb) = (&self.nodes[a as usize], &self.nodes[b as usize]);
+                let ta = slab_entry(na.lo, na.hi, origin, inv, tmin, tmax);
+                let tb = slab_entry(nb.lo, nb.hi, origin, inv, tmin, tmax);
+                match (ta, tb) {
+                    (Some(x), Some(y)) => {
+                        // The far one first: the near one is popped next.
+                        let (far, near) = if x <= y { (b, a) } else { (a, b) };
+                        stack[sp] = far;
+                        stack[sp + 1] = near;
+                        sp += 2;
+                    }
+                    (Some(_), None) => {
+                        stack[sp] = a;
+                        sp += 1;
+                    }
+                    (None, Some(_)) => {
+                        stack[sp] = b;
+                        sp += 1;
+                    }
+                    (None, None) => {}
+                }
             }
         }
         false
