@@ -840,8 +840,23 @@ impl<'v> Solver<'v> {
                 .expect("a receiver near the shooter's plane has its nudge");
             nudges[k]
         };
+        // Whole patches hidden behind one triangle (only when shooting at
+        // every vertex: a list of new vertices is short).
+        let hidden: Vec<Option<Vec<u64>>> = shooters
+            .iter()
+            .map(|(_, c)| match targets {
+                Targets::All => self.hidden_patches(*c, surface, normal),
+                Targets::List(_) => None,
+            })
+            .collect();
+        let mesh = &self.mesh;
         let gain = &mut self.gain;
-        for ((poly, c), &delta) in shooters.iter().zip(&deltas) {
+        for (((poly, c), &delta), hidden) in shooters.iter().zip(&deltas).zip(&hidden) {
+            let shown = |v: VertId| {
+                hidden
+                    .as_ref()
+                    .is_none_or(|h| h[v.idx() / 64] & (1 << (v.idx() % 64)) == 0)
+            };
             let mut start = 0;
             while start < n_targets {
                 // At most CHUNK targets at a time: the candidate lists cost 13
@@ -849,7 +864,7 @@ impl<'v> Solver<'v> {
                 let end = (start + CHUNK_TARGETS).min(n_targets);
                 let cand: Vec<VertId> = (start..end)
                     .map(target)
-                    .filter(|&v| candidate(v, *c, delta))
+                    .filter(|&v| candidate(v, *c, delta) && shown(v))
                     .collect();
                 start = end;
                 let seen = self.vis.visible(mesh, *c, surface, &cand);
@@ -898,6 +913,89 @@ impl<'v> Solver<'v> {
             }
         }
         reached
+    }
+
+    /// The vertices of every patch that one triangle hides entirely from
+    /// the point `c` (a bitmap over vertices), or `None` when the
+    /// visibility cannot name blocking triangles.
+    ///
+    /// A patch P is hidden when the segment from `c` to its first corner is
+    /// blocked by a triangle T (of neither the shooter's nor P's surface),
+    /// `c` lies strictly on one side of T's plane and all of P's corners
+    /// strictly on the other, and the segments to all corners cross T's
+    /// plane well inside T (barycentrics ≥ 1e-7, parameters in
+    /// (1e-6, 1 − 1e-6)). The central projection from `c` maps the convex
+    /// patch to the convex hull of its corners' crossings, so the segment
+    /// to every point of P crosses T there too: every vertex of P is
+    /// occluded, and a ray to it would have said so (the answers, and so
+    /// the output, are unchanged; only the rays are saved).
+    fn hidden_patches(&self, c: DVec3, shooter: SurfaceId, normal: DVec3) -> Option<Vec<u64>> {
+        let mesh = &self.mesh;
+        // Only the ray caster names blockers (the hemi-cube's answers are
+        // its own; culling must not change them).
+        if self.vis.name() != "ray" {
+            return None;
+        }
+        let np = mesh.num_patches();
+        let flags: Vec<bool> = (0..np)
+            .into_par_iter()
+            .map(|p| {
+                let pid = PatchId(p as u32);
+                let s = mesh.patch_surface(pid);
+                if s == shooter {
+                    return false;
+                }
+                let corners = mesh.patch_corners(pid);
+                let x: Vec<DVec3> = corners.iter().map(|&v| mesh.vertex_pos(v)).collect();
+                // Not facing the shooter, or wholly behind its plane: no
+                // vertex of it is a candidate anyway.
+                let n = mesh.surface_normal(s);
+                if n.dot(c - x[0]) <= 0.0 || x.iter().all(|&xi| normal.dot(xi - c) < 0.0) {
+                    return false;
+                }
+                let Some(t) = self.vis.blocker(c, x[0], shooter, s) else {
+                    return false;
+                };
+                let tn = (t[1] - t[0]).cross(t[2] - t[0]);
+                let side_c = tn.dot(c - t[0]);
+                if side_c == 0.0 {
+                    return false;
+                }
+                let (e1, e2) = (t[1] - t[0], t[2] - t[0]);
+                let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+                let den = d11 * d22 - d12 * d12;
+                if den <= 0.0 {
+                    return false;
+                }
+                x.iter().all(|&xi| {
+                    let side_x = tn.dot(xi - t[0]);
+                    // Strictly on the other side.
+                    if side_x * side_c >= 0.0 {
+                        return false;
+                    }
+                    let tt = side_c / (side_c - side_x);
+                    if !(1e-6..=1.0 - 1e-6).contains(&tt) {
+                        return false;
+                    }
+                    let q = c + (xi - c) * tt - t[0];
+                    let (q1, q2) = (q.dot(e1), q.dot(e2));
+                    let b1 = (d22 * q1 - d12 * q2) / den;
+                    let b2 = (d11 * q2 - d12 * q1) / den;
+                    b1 >= 1e-7 && b2 >= 1e-7 && 1.0 - b1 - b2 >= 1e-7
+                })
+            })
+            .collect();
+        let mut bits = vec![0u64; mesh.num_vertices().div_ceil(64)];
+        for (p, &h) in flags.iter().enumerate() {
+            if h {
+                for e in mesh.patch_leaves(PatchId(p as u32)) {
+                    for v in mesh.elem_corners(e) {
+                        bits[v.idx() / 64] |= 1 << (v.idx() % 64);
+                    }
+                }
+            }
+        }
+        Some(bits)
     }
 
     /// For each of the given vertices (sorted, distinct), the unit direction
@@ -1168,5 +1266,75 @@ impl Solver<'_> {
     pub fn write_ug(&self, src: &Model, out: &mut dyn std::io::Write) -> std::io::Result<()> {
         let mut colours = Colours::new(self, src);
         self.mesh.write_ug_with(src, &mut colours, out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::RayVisibility;
+
+    /// Every vertex of a patch found hidden behind one triangle is occluded
+    /// by the ray caster too (the culling never changes an answer), and the
+    /// culling finds something: two rooms with a wall between them (no
+    /// door), a box and a lamp in the first.
+    #[test]
+    fn hidden_patches_are_occluded_and_found() {
+        let src = "c_rgb g 0.5 0.5 0.5;
+            defmat lamp; diffuse_rgb 0.5 0.5 0.5; emission_rgb 5 5 5; end;
+            v a 0 0 0; v b 8 0 0; v c 8 4 0; v d 0 4 0;
+            v e 0 0 3; v f 8 0 3; v g 8 4 3; v h 0 4 3;
+            v w0 4 0 0; v w1 4 4 0; v w2 4 4 3; v w3 4 0 3;
+            v k0 1 1 0.001; v k1 2 1 0.001; v k2 2 2 0.001; v k3 1 2 0.001;
+            v k4 1 1 1; v k5 2 1 1; v k6 2 2 1; v k7 1 2 1;
+            v l0 1.5 1.5 2.99; v l1 2.5 1.5 2.99; v l2 2.5 2.5 2.99; v l3 1.5 2.5 2.99;
+            f floor (a b c d) g; f ceiling (e h g f) g;
+            f south (a e f b) g; f north (c g h d) g; f west (a d h e) g; f east (b f g c) g;
+            f wall_w (w0 w1 w2 w3) g; f wall_e (w0 w3 w2 w1) g;
+            f top (k4 k5 k6 k7) g; f s1 (k0 k1 k5 k4) g; f s2 (k1 k2 k6 k5) g;
+            f s3 (k2 k3 k7 k6) g; f s4 (k3 k0 k4 k7) g;
+            f lamp (l0 l3 l2 l1) lamp;";
+        let model = ug::parse(src.as_bytes(), "t").unwrap().model;
+        let opts = ugcut::Options {
+            len: 0.5,
+            eps: 1e-9,
+            angle: 25.0,
+            quads: true,
+        };
+        let model = ugcut::cut(&model, opts).0;
+        let mesh = Mesh::from_model(&model, 1e-9).unwrap();
+        let vis = RayVisibility::new(&mesh);
+        let solver = Solver::new(mesh, &model.materials, &vis, Options::default());
+        let m = &solver.mesh;
+        let lamp = m
+            .patches()
+            .find(|&p| sum(solver.emit[m.patch_surface(p).idx()]) > 0.0)
+            .unwrap();
+        let s = m.patch_surface(lamp);
+        let (mut hidden, mut checked) = (0, 0);
+        for c in [
+            DVec3::new(2.0, 2.0, 2.98),
+            DVec3::new(1.7, 1.6, 2.98),
+            DVec3::new(2.4, 2.3, 2.98),
+        ] {
+            let bits = solver
+                .hidden_patches(c, s, m.surface_normal(s))
+                .expect("the ray caster names blockers");
+            for v in 0..m.num_vertices() {
+                let vid = VertId(v as u32);
+                if bits[v / 64] & (1 << (v % 64)) != 0 {
+                    hidden += 1;
+                    assert!(
+                        !vis.clear(c, m.vertex_pos(vid), s, m.vertex_surface(vid)),
+                        "vertex {v} at {} marked hidden from {c} but visible",
+                        m.vertex_pos(vid)
+                    );
+                }
+                checked += 1;
+            }
+        }
+        // The second room's floor is behind the wall, the floor under the
+        // box behind its top.
+        assert!(hidden > 100, "{hidden} of {checked}");
     }
 }

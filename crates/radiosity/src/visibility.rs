@@ -20,6 +20,20 @@ pub trait Visibility: Sync {
 
     /// A short name for messages (`ray`, `hemicube`).
     fn name(&self) -> &'static str;
+
+    /// A triangle (of a surface other than `a` and `b`) that the open
+    /// segment from → to crosses, if the implementation can name one: the
+    /// solver uses it to find whole patches hidden behind one triangle.
+    /// The default names none.
+    fn blocker(
+        &self,
+        _from: DVec3,
+        _to: DVec3,
+        _a: SurfaceId,
+        _b: SurfaceId,
+    ) -> Option<[DVec3; 3]> {
+        None
+    }
 }
 
 /// Ray casting against a BVH of the patches (the geometry does not change
@@ -115,13 +129,26 @@ impl RayVisibility {
         tmax: f64,
         keep: impl Fn(u32) -> bool,
     ) -> bool {
+        self.first_hit(origin, dir, tmin, tmax, keep).is_some()
+    }
+
+    /// The first triangle found (in traversal order, not the nearest) whose
+    /// surface passes `keep` and that is hit with `tmin < t < tmax`.
+    fn first_hit(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        tmin: f64,
+        tmax: f64,
+        keep: impl Fn(u32) -> bool,
+    ) -> Option<&Tri> {
         if self.nodes.is_empty() {
-            return false;
+            return None;
         }
         let inv = DVec3::ONE / dir;
         let root = &self.nodes[0];
         if !slab(root.lo, root.hi, origin, inv, tmin, tmax) {
-            return false;
+            return None;
         }
         // Nearer child first: a ray toward a vertex in another room is
         // usually stopped by a wall near its start, so the boxes near the
@@ -141,7 +168,7 @@ impl RayVisibility {
                         && tt > tmin
                         && tt < tmax
                     {
-                        return true;
+                        return Some(t);
                     }
                 }
             } else {
@@ -170,7 +197,7 @@ impl RayVisibility {
                 }
             }
         }
-        false
+        None
     }
 }
 
@@ -190,6 +217,13 @@ impl Visibility for RayVisibility {
 
     fn name(&self) -> &'static str {
         "ray"
+    }
+
+    fn blocker(&self, from: DVec3, to: DVec3, a: SurfaceId, b: SurfaceId) -> Option<[DVec3; 3]> {
+        self.first_hit(from, to - from, 1e-7, 1.0 - 1e-7, |id| {
+            id != a.0 && id != b.0
+        })
+        .map(|t| self.triangle(t).p)
     }
 }
 
