@@ -182,8 +182,8 @@ for n in "${sizes[@]}"; do
     if [ "$input" -le "$CONVERGE_MAX" ]; then
         run ugrad "$d/9.err" "$bin/ugrad" -v --visibility ray ${RAD_EPS:+-e $RAD_EPS} -o "$d/9.ug" "$d/7.ug"
         if [ "$ok" = 1 ]; then
-            # "indirect tail after shot S: C patch corners, P pairs (M MB; …), I iterations; …"
-            tl=$(sed -n 's/^indirect tail after shot \([0-9]*\): [0-9]* patch corners, \([0-9]*\) pairs ([0-9.]* MB; [^)]*), \([0-9]*\) iterations.*/\1 \2 \3/p' "$d/9.err")
+            # "indirect tail after shot S: N patch centres (P pairs stored, M MB …; …), I iterations; …"
+            tl=$(sed -n 's/^indirect tail after shot \([0-9]*\): [0-9]* patch centres (\([0-9]*\) pairs stored, [^)]*), \([0-9]*\) iterations.*/\1 \2 \3/p' "$d/9.err")
             st=$(sed -n 's/^stopped (\([A-Za-z]*\)) after \([0-9]*\) shots; \([0-9]*\) leaf elements.*unshot \([0-9.e+-]*\) .*/\1 \2 \3 \4/p' "$d/9.err")
             sv=$(sed -n 's/^time: .*, solve \([0-9.]*\) s.*/\1/p' "$d/9.err")
             read -r stop shots elems unshot <<<"$st"
