@@ -3,7 +3,7 @@
 //! adapter unless `UG_REQUIRE_GPU=1`.
 
 use std::collections::BTreeMap;
-use ugkit::{fixture, run};
+use ugkit::{clean_chain, fixture, run};
 
 fn require_gpu() -> bool {
     std::env::var("UG_REQUIRE_GPU").is_ok_and(|v| v == "1")
@@ -202,28 +202,6 @@ fn agreement(patches_ug: &[u8], method: hemicube::Method) -> Option<(usize, usiz
         100.0 * after as f64 / total as f64
     );
     Some((total, before, after))
-}
-
-fn clean_chain(model: Vec<u8>, len: &str) -> Vec<u8> {
-    let mut m = model;
-    for (tool, args) in [
-        ("ugplanar", vec![]),
-        ("ugvlmerge", vec![]),
-        ("ugflip", vec![]),
-        ("ugisect", vec![]),
-        ("ugcopl", vec![]),
-        ("ugclean", vec![]),
-        ("ugcut", vec!["-l", len]),
-    ] {
-        let out = run(tool, &args, Some(&m));
-        assert!(
-            out.status.success(),
-            "{tool}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        m = out.stdout;
-    }
-    m
 }
 
 #[test]

@@ -3,7 +3,7 @@
 
 use std::process::Command;
 
-use ugkit::{assert_golden, bin, fixture, run, run_ok};
+use ugkit::{assert_golden, bin, clean_chain, fixture, run, run_ok};
 
 /// ugplanar | ugcut -l LEN of a fixture.
 fn patches(name: &str, len: &str) -> String {
@@ -355,25 +355,7 @@ fn degenerate_slivers_are_left_out_with_a_warning() {
 fn building(args: &[&str], len: &str) -> Vec<u8> {
     let b = run("ugbuilding", args, None);
     assert!(b.status.success(), "{}", String::from_utf8_lossy(&b.stderr));
-    let mut m = b.stdout;
-    for (tool, args) in [
-        ("ugplanar", vec![]),
-        ("ugvlmerge", vec![]),
-        ("ugflip", vec![]),
-        ("ugisect", vec![]),
-        ("ugcopl", vec![]),
-        ("ugclean", vec![]),
-        ("ugcut", vec!["-l", len]),
-    ] {
-        let out = run(tool, &args, Some(&m));
-        assert!(
-            out.status.success(),
-            "{tool}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        m = out.stdout;
-    }
-    m
+    clean_chain(b.stdout, len)
 }
 
 /// 16 messy rooms (3,234 patches): shooting patch by patch to 1e-3 takes

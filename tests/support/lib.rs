@@ -81,6 +81,31 @@ pub fn run_ok(name: &str, args: &[&str], stdin: Option<&[u8]>) -> String {
     String::from_utf8(out.stdout).expect("UTF-8 output")
 }
 
+/// The recommended cleaning chain and `ugcut -l LEN` on a model, each
+/// stage asserted to succeed: ugplanar | ugvlmerge | ugflip | ugisect |
+/// ugcopl | ugclean | ugcut.
+pub fn clean_chain(model: Vec<u8>, len: &str) -> Vec<u8> {
+    let mut m = model;
+    for (tool, args) in [
+        ("ugplanar", vec![]),
+        ("ugvlmerge", vec![]),
+        ("ugflip", vec![]),
+        ("ugisect", vec![]),
+        ("ugcopl", vec![]),
+        ("ugclean", vec![]),
+        ("ugcut", vec!["-l", len]),
+    ] {
+        let out = run(tool, &args, Some(&m));
+        assert!(
+            out.status.success(),
+            "{tool}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        m = out.stdout;
+    }
+    m
+}
+
 /// Compares `actual` with the golden file at `path` (relative to the workspace root);
 /// with `UPDATE_GOLDEN=1` the file is (re)written instead.
 pub fn assert_golden(path: &str, actual: &str) {

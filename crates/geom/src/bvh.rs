@@ -246,6 +246,13 @@ pub fn build_nodes<T>(items: &mut [T], corners: impl Fn(&T) -> [DVec3; 3]) -> Ve
 /// box [lo, hi] for some t in [tmin, tmax].
 #[inline]
 pub fn slab(lo: DVec3, hi: DVec3, o: DVec3, inv: DVec3, tmin: f64, tmax: f64) -> bool {
+    slab_entry(lo, hi, o, inv, tmin, tmax).is_some()
+}
+
+/// [`slab`] with the entry parameter: `Some(t)` (the first t ≥ `tmin` in
+/// the box) when the ray meets the box for some t in [tmin, tmax].
+#[inline]
+pub fn slab_entry(lo: DVec3, hi: DVec3, o: DVec3, inv: DVec3, tmin: f64, tmax: f64) -> Option<f64> {
     let (mut tn, mut tf) = (tmin, tmax);
     for k in 0..3 {
         let a = (lo[k] - o[k]) * inv[k];
@@ -254,24 +261,6 @@ pub fn slab(lo: DVec3, hi: DVec3, o: DVec3, inv: DVec3, tmin: f64, tmax: f64) ->
         // its faces, so it stays inside the (closed) slab: no constraint.
         // (Through `f64::min`, which ignores NaN, such a ray used to be
         // rejected, and could miss a box it lies in.)
-        if a.is_nan() || b.is_nan() {
-            continue;
-        }
-        tn = tn.max(a.min(b));
-        tf = tf.min(a.max(b));
-    }
-    tn <= tf
-}
-
-/// [`slab`] with the entry parameter: `Some(t)` (the first t ≥ `tmin` in
-/// the box) when the ray meets the box for some t in [tmin, tmax]. Exactly
-/// when `slab` says yes.
-#[inline]
-pub fn slab_entry(lo: DVec3, hi: DVec3, o: DVec3, inv: DVec3, tmin: f64, tmax: f64) -> Option<f64> {
-    let (mut tn, mut tf) = (tmin, tmax);
-    for k in 0..3 {
-        let a = (lo[k] - o[k]) * inv[k];
-        let b = (hi[k] - o[k]) * inv[k];
         if a.is_nan() || b.is_nan() {
             continue;
         }
