@@ -12,6 +12,42 @@
 
 use glam::DVec3;
 
+/// Whether a receiver at `x` (unit normal `n`) can take light from a
+/// shooter centred at `c` whose plane has unit normal `m`: the receiver in
+/// front of the shooter's plane (or within the §5.4 offset `delta` behind
+/// it) and the shooter's centre in front of the receiver.
+#[inline]
+pub fn receives(x: DVec3, n: DVec3, c: DVec3, m: DVec3, delta: f64) -> bool {
+    m.dot(x - c) > -delta && n.dot(c - x) > 0.0
+}
+
+/// §5.4: the point at which a receiver at `x` takes the form factor of a
+/// shooter centred at `c` (plane normal `m`, offset `delta`). A receiver on
+/// (or just behind) the shooter's plane is moved a little in front of it —
+/// and first a little into its own surface (`inward()`, asked only then), so
+/// that at a corner where several shooters meet it takes the limit from
+/// inside the receiving surface (moving it off one plane only would leave
+/// it on the other). The same nudged point serves every shooter, so the
+/// pieces of the hemisphere that neighbouring shooters share add up.
+#[inline]
+pub fn offset_receiver(
+    x: DVec3,
+    inward: impl FnOnce() -> DVec3,
+    c: DVec3,
+    m: DVec3,
+    delta: f64,
+) -> DVec3 {
+    let mut x = x;
+    if m.dot(x - c) < delta {
+        x += inward() * delta;
+        let d = m.dot(x - c);
+        if d < 0.01 * delta {
+            x += m * (0.01 * delta - d);
+        }
+    }
+    x
+}
+
 /// Clips a polygon to the half-space `n · (p − x) ≥ 0` (Sutherland–Hodgman).
 pub fn clip_to_front(poly: &[DVec3], x: DVec3, n: DVec3, out: &mut Vec<DVec3>) {
     out.clear();

@@ -10,7 +10,7 @@ use libmesh::{ElemId, Mesh, PatchId, SurfaceId, VertId};
 use rayon::prelude::*;
 use ug::{Item, Material, MaterialDef, MaterialId, Model};
 
-use crate::formfactor::point_to_polygon;
+use crate::formfactor::{offset_receiver, point_to_polygon, receives};
 use crate::visibility::Visibility;
 
 type Rgb = [f64; 3];
@@ -817,8 +817,7 @@ impl<'v> Solver<'v> {
             if mesh.vertex_surface(v) == surface {
                 return false;
             }
-            let x = mesh.vertex_pos(v);
-            normal.dot(x - c) > -delta && mesh.vertex_normal(v).dot(c - x) > 0.0
+            receives(mesh.vertex_pos(v), mesh.vertex_normal(v), c, normal, delta)
         };
         // §5.4 needs each receiver's direction into its own surface only for
         // candidates on (or just behind) a shooter's plane: find those first.
@@ -875,21 +874,7 @@ impl<'v> Solver<'v> {
                         if !s {
                             return 0.0;
                         }
-                        let mut x = mesh.vertex_pos(v);
-                        // §5.4: a receiver on (or just behind) the shooter's plane is
-                        // moved a little in front of it — and first a little into its
-                        // own surface, so that at a corner where several shooters
-                        // meet it takes the limit from inside the receiving surface
-                        // (moving it off one plane only would leave it on the other).
-                        // The same nudged point serves every shooter, so the pieces
-                        // of the hemisphere that neighbouring shooters share add up.
-                        if normal.dot(x - *c) < delta {
-                            x += nudge(v) * delta;
-                            let d = normal.dot(x - *c);
-                            if d < 0.01 * delta {
-                                x += normal * (0.01 * delta - d);
-                            }
-                        }
+                        let x = offset_receiver(mesh.vertex_pos(v), || nudge(v), *c, normal, delta);
                         point_to_polygon(x, mesh.vertex_normal(v), poly)
                     })
                     .collect();
@@ -917,7 +902,8 @@ impl<'v> Solver<'v> {
 
     /// The vertices of every patch that one triangle hides entirely from
     /// the point `c` (a bitmap over vertices), or `None` when the
-    /// visibility cannot name blocking triangles.
+    /// visibility does not name blocking triangles (the hemi-cube's answers
+    /// are its own; culling must not change them).
     ///
     /// A patch P is hidden when the segment from `c` to its first corner is
     /// blocked by a triangle T (of neither the shooter's nor P's surface),
@@ -930,12 +916,10 @@ impl<'v> Solver<'v> {
     /// occluded, and a ray to it would have said so (the answers, and so
     /// the output, are unchanged; only the rays are saved).
     fn hidden_patches(&self, c: DVec3, shooter: SurfaceId, normal: DVec3) -> Option<Vec<u64>> {
-        let mesh = &self.mesh;
-        // Only the ray caster names blockers (the hemi-cube's answers are
-        // its own; culling must not change them).
-        if self.vis.name() != "ray" {
+        if !self.vis.names_blockers() {
             return None;
         }
+        let mesh = &self.mesh;
         let np = mesh.num_patches();
         let flags: Vec<bool> = (0..np)
             .into_par_iter()
@@ -945,8 +929,13 @@ impl<'v> Solver<'v> {
                 if s == shooter {
                     return false;
                 }
+                // Patches are triangles and quads: no allocation per patch.
                 let corners = mesh.patch_corners(pid);
-                let x: Vec<DVec3> = corners.iter().map(|&v| mesh.vertex_pos(v)).collect();
+                let mut buf = [DVec3::ZERO; 4];
+                for (b, &v) in buf.iter_mut().zip(corners) {
+                    *b = mesh.vertex_pos(v);
+                }
+                let x = &buf[..corners.len().min(4)];
                 // Not facing the shooter, or wholly behind its plane: no
                 // vertex of it is a candidate anyway.
                 let n = mesh.surface_normal(s);

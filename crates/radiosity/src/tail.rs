@@ -41,7 +41,7 @@ use glam::DVec3;
 use libmesh::{Mesh, VertId, VertexOrigin};
 use rayon::prelude::*;
 
-use crate::formfactor::point_to_polygon;
+use crate::formfactor::{offset_receiver, point_to_polygon, receives};
 
 type Rgb = [f64; 3];
 
@@ -259,8 +259,7 @@ impl Transport {
             }
             let (c, delta) = (sh.centre, sh.delta);
             // In front of the shooter's plane and facing it (as a shot tests).
-            let d = sh.normal.dot(x0 - c);
-            if d <= -delta || n.dot(c - x0) <= 0.0 {
+            if !receives(x0, n, c, sh.normal, delta) {
                 continue;
             }
             if self.bvh.occluded(c, x0 - c, 1e-7, 1.0 - 1e-7, |id| {
@@ -269,14 +268,7 @@ impl Transport {
             }) {
                 continue;
             }
-            let mut x = x0;
-            if d < delta {
-                x += r.inward * delta;
-                let d2 = sh.normal.dot(x - c);
-                if d2 < 0.01 * delta {
-                    x += sh.normal * (0.01 * delta - d2);
-                }
-            }
+            let x = offset_receiver(x0, || r.inward, c, sh.normal, delta);
             let f = point_to_polygon(
                 x,
                 n,

@@ -21,6 +21,13 @@ pub trait Visibility: Sync {
     /// A short name for messages (`ray`, `hemicube`).
     fn name(&self) -> &'static str;
 
+    /// Whether [`Visibility::blocker`] names blocking triangles; only then
+    /// does the solver skip whole patches hidden behind one (its answers
+    /// must be the implementation's own). The default: no.
+    fn names_blockers(&self) -> bool {
+        false
+    }
+
     /// A triangle (of a surface other than `a` and `b`) that the open
     /// segment from → to crosses, if the implementation can name one: the
     /// solver uses it to find whole patches hidden behind one triangle.
@@ -217,6 +224,10 @@ impl Visibility for RayVisibility {
 
     fn name(&self) -> &'static str {
         "ray"
+    }
+
+    fn names_blockers(&self) -> bool {
+        true
     }
 
     fn blocker(&self, from: DVec3, to: DVec3, a: SurfaceId, b: SurfaceId) -> Option<[DVec3; 3]> {

@@ -4,16 +4,8 @@
 
 use radiosity::{Options, RayVisibility, Solver};
 
-fn patches(src: &str, len: f64) -> ug::Model {
-    let m = ug::parse(src.as_bytes(), "test").unwrap().model;
-    let opts = ugcut::Options {
-        len,
-        eps: 1e-9,
-        angle: 25.0,
-        quads: true,
-    };
-    ugcut::cut(&m, opts).0
-}
+mod common;
+use common::patches;
 
 /// Form factor from a point to a parallel rectangle [x1,x2]×[y1,y2] at height
 /// h above it (Howell's corner formula, by superposition of signed corners).

@@ -3,16 +3,8 @@
 
 use radiosity::{Options, RayVisibility, Solver};
 
-fn patches(src: &str, len: f64) -> ug::Model {
-    let m = ug::parse(src.as_bytes(), "test").unwrap().model;
-    let opts = ugcut::Options {
-        len,
-        eps: 1e-9,
-        angle: 25.0,
-        quads: true,
-    };
-    ugcut::cut(&m, opts).0
-}
+mod common;
+use common::patches;
 
 /// An axis-aligned box as six faces, facing inward (`inward`) or outward.
 fn boxed(s: &mut String, name: &str, lo: [f64; 3], hi: [f64; 3], inward: bool, mat: &str) {
