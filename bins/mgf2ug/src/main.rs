@@ -47,11 +47,11 @@ fn main() -> std::process::ExitCode {
     cli::run(|| {
         let c = &args.common;
         let input = c.read_input()?;
-        let out = mgf2ug::convert(
+        let out = formats::mgf::convert(
             &input.bytes,
             &input.name,
             &input.dir,
-            &mgf2ug::Options {
+            &formats::mgf::Options {
                 strict: c.strict,
                 segments: args.segments,
                 two_sided: args.two_sided,

@@ -31,7 +31,7 @@ struct Args {
     #[command(flatten)]
     common: cli::Common,
     /// Make material NAME (OBJ or UG name) an emitter with exitance r,g,b (repeatable).
-    #[arg(long, value_name = "NAME=R,G,B", value_parser = obj2ug::parse_emit)]
+    #[arg(long, value_name = "NAME=R,G,B", value_parser = formats::obj::parse_emit)]
     emit: Vec<(String, [f64; 3])>,
     /// Read 'v x y z r g b' colours as per-vertex colours (radiosity B, as
     /// written by ug2obj --radiosity).
@@ -44,11 +44,11 @@ fn main() -> std::process::ExitCode {
     cli::run(|| {
         let c = &args.common;
         let input = c.read_input()?;
-        let out = obj2ug::convert(
+        let out = formats::obj::convert(
             &input.bytes,
             &input.name,
             &input.dir,
-            &obj2ug::Options {
+            &formats::obj::Options {
                 strict: c.strict,
                 emit: args.emit.clone(),
                 vertex_colours: args.vertex_colours,

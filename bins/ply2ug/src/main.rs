@@ -40,10 +40,10 @@ fn main() -> std::process::ExitCode {
     cli::run(|| {
         let c = &args.common;
         let input = c.read_input()?;
-        let out = ply2ug::convert(
+        let out = formats::ply::convert(
             &input.bytes,
             &input.name,
-            &ply2ug::Options {
+            &formats::ply::Options {
                 ignore_colours: args.ignore_colours,
             },
         )

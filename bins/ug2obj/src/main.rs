@@ -81,9 +81,9 @@ fn main() -> std::process::ExitCode {
             )));
         }
         let model = c.load_flat()?;
-        let out = ug2obj::to_obj(
+        let out = formats::obj::write::to_obj(
             &model,
-            &ug2obj::ObjOptions {
+            &formats::obj::write::ObjOptions {
                 triangles: args.triangles,
                 exposure: args.exposure,
                 mtllib,

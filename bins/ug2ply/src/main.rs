@@ -47,9 +47,9 @@ fn main() -> std::process::ExitCode {
     cli::run(|| {
         let c = &args.common;
         let model = c.load_flat()?;
-        let out = ug2ply::to_ply(
+        let out = formats::ply::write::to_ply(
             &model,
-            &ug2ply::PlyOptions {
+            &formats::ply::write::PlyOptions {
                 binary: args.binary,
                 triangles: args.triangles,
                 exposure: args.exposure,

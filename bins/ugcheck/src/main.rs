@@ -43,12 +43,12 @@ struct Args {
 }
 
 fn parse_category(s: &str) -> Result<String, String> {
-    if s == "all" || s == "defects" || ugcheck::CATEGORIES.contains(&s) {
+    if s == "all" || s == "defects" || check::CATEGORIES.contains(&s) {
         Ok(s.to_string())
     } else {
         Err(format!(
             "unknown category '{s}' (one of: {}, defects, all)",
-            ugcheck::CATEGORIES.join(", ")
+            check::CATEGORIES.join(", ")
         ))
     }
 }
@@ -69,7 +69,7 @@ fn main() -> std::process::ExitCode {
             }
         ));
         let t = std::time::Instant::now();
-        let report = ugcheck::check(&model, eps);
+        let report = check::check(&model, eps);
         c.verbose(format!("checked in {:.3} s", t.elapsed().as_secs_f64()));
         let text = if args.json {
             let mut s = serde_json::to_string_pretty(&report)
@@ -83,8 +83,8 @@ fn main() -> std::process::ExitCode {
             .deny
             .iter()
             .flat_map(|d| match d.as_str() {
-                "all" => ugcheck::CATEGORIES.to_vec(),
-                "defects" => ugcheck::DEFECTS.to_vec(),
+                "all" => check::CATEGORIES.to_vec(),
+                "defects" => check::DEFECTS.to_vec(),
                 other => vec![other],
             })
             .collect();

@@ -27,11 +27,9 @@ struct Args {
 
 fn main() -> std::process::ExitCode {
     let args = Args::parse();
-    cli::run(|| {
-        let c = &args.common;
-        let model = c.load_flat()?;
-        let eps = cli::epsilon(args.epsilon, &model);
-        let (out, st) = ugclean::clean(&model, eps);
+    let c = &args.common;
+    cli::filter(c, args.epsilon, |model, eps| {
+        let (out, st) = clean::coincident::clean(&model, eps);
         if c.verbose > 0 {
             eprintln!(
                 "epsilon {eps:e}; {} coincident pairs; removed {} faces, area {}",
@@ -43,6 +41,6 @@ fn main() -> std::process::ExitCode {
                 eprintln!("  removed {r} (kept {k}): {why}");
             }
         }
-        c.write_model(&out)
+        Ok(out)
     })
 }

@@ -27,15 +27,13 @@ struct Args {
 
 fn main() -> std::process::ExitCode {
     let args = Args::parse();
-    cli::run(|| {
-        let c = &args.common;
-        let model = c.load_flat()?;
-        let eps = cli::epsilon(args.epsilon, &model);
-        let (out, st) = ugcopl::copl(&model, eps)?;
+    let c = &args.common;
+    cli::filter(c, args.epsilon, |model, eps| {
+        let (out, st) = clean::copl::copl(&model, eps)?;
         c.verbose(format!(
             "epsilon {eps:e}; {} overlapping pairs; {} faces cut into {} pieces; {} new vertices; {} T-vertices inserted",
             st.pairs, st.faces_cut, st.pieces, st.new_vertices, st.tvertices
         ));
-        c.write_model(&out)
+        Ok(out)
     })
 }

@@ -45,9 +45,8 @@ fn parse_angle(s: &str) -> Result<f64, String> {
 
 fn main() -> std::process::ExitCode {
     let args = Args::parse();
-    cli::run(|| {
-        let c = &args.common;
-        let model = c.load_flat()?;
+    let c = &args.common;
+    cli::filter(c, args.epsilon, |model, eps| {
         let diag = model.bounds().map_or(0.0, |(lo, hi)| (hi - lo).length());
         let len = match args.len.strip_suffix('%') {
             Some(p) => p.trim().parse::<f64>().ok().map(|p| p / 100.0 * diag),
@@ -59,19 +58,18 @@ fn main() -> std::process::ExitCode {
                 args.len
             ))
         })?;
-        let eps = cli::epsilon(args.epsilon, &model);
         if len <= 10.0 * eps {
             return Err(cli::Failure::input(format!(
                 "error: -l {len} is not larger than 10 × epsilon ({eps:e})"
             )));
         }
-        let opts = ugcut::Options {
+        let opts = libmesh::patch::Options {
             len,
             eps,
             angle: args.angle,
             quads: !args.triangles,
         };
-        let (out, st) = ugcut::cut(&model, opts);
+        let (out, st) = libmesh::patch::cut(&model, opts);
         if !c.quiet {
             for f in &st.failed {
                 eprintln!(
@@ -83,6 +81,6 @@ fn main() -> std::process::ExitCode {
             "length {len}, epsilon {eps:e}: {} faces → {} patches ({} quads of which {} grid cells, {} triangles); edges min {:.4} mean {:.4} max {:.4}; worst triangle angle {:.1}°",
             st.faces, st.patches, st.quads, st.grid_cells, st.triangles, st.min_edge, st.mean_edge, st.max_edge, st.worst_angle
         ));
-        c.write_model(&out)
+        Ok(out)
     })
 }

@@ -62,11 +62,9 @@ fn parse_point(s: &str) -> Result<DVec3, String> {
 
 fn main() -> std::process::ExitCode {
     let args = Args::parse();
-    cli::run(|| {
-        let c = &args.common;
-        let model = c.load_flat()?;
-        let eps = cli::epsilon(args.epsilon, &model);
-        let opts = ugflip::Options {
+    let c = &args.common;
+    cli::filter(c, args.epsilon, |model, eps| {
+        let opts = clean::orient::Options {
             auto: !args.no_auto,
             bombs: args.bombs.clone(),
             flip: args.flip.clone(),
@@ -74,9 +72,9 @@ fn main() -> std::process::ExitCode {
             double_sided_ambiguous: args.double_sided_ambiguous,
             rays: args.rays as usize,
             eps,
-            viewpoints: ugflip::camera_eyes(&model),
+            viewpoints: clean::orient::camera_eyes(&model),
         };
-        let (out, r) = ugflip::orient(model, &opts).map_err(|u| {
+        let (out, r) = clean::orient::orient(model, &opts).map_err(|u| {
             cli::Failure::input(format!(
                 "error: no face named '{}' (unnamed faces are #1, #2, …)",
                 u.0
@@ -112,6 +110,6 @@ fn main() -> std::process::ExitCode {
             "epsilon {eps:e}; {} components; flipped {} faces: {} for consistency, {} outward (solids), {} inward (rooms), {} toward the scene (open parts), {} by light bombs, {} by name; {} double-sided twins added; {} ambiguous",
             r.components, r.flipped(), r.consistency, r.outward, r.inward, r.toward_scene, r.by_bombs, r.by_name, r.doubled, r.ambiguous.len()
         ));
-        c.write_model(&out)
+        Ok(out)
     })
 }

@@ -28,12 +28,10 @@ struct Args {
 
 fn main() -> std::process::ExitCode {
     let args = Args::parse();
-    cli::run(|| {
-        let c = &args.common;
-        let model = c.load_flat()?;
-        let eps = cli::epsilon(args.epsilon, &model);
+    let c = &args.common;
+    cli::filter(c, args.epsilon, |model, eps| {
         c.verbose(format!("epsilon {eps:e}"));
-        let (out, st) = ugplanar::planarize(&model, eps);
+        let (out, st) = clean::planar::planarize(&model, eps);
         if !c.quiet {
             for f in &st.failed {
                 eprintln!(
@@ -45,6 +43,6 @@ fn main() -> std::process::ExitCode {
             "{} faces, {} non-planar, {} triangles written",
             st.faces, st.nonplanar, st.triangles
         ));
-        c.write_model(&out)
+        Ok(out)
     })
 }

@@ -32,16 +32,16 @@ struct Args {
     #[command(flatten)]
     common: cli::Common,
     /// Picture size in pixels.
-    #[arg(long, default_value = "800x600", value_parser = ugview::parse_size, value_name = "WxH")]
+    #[arg(long, default_value = "800x600", value_parser = view::parse_size, value_name = "WxH")]
     size: (u32, u32),
     /// Eye position (default: the cam statement's, or a view framing the model).
-    #[arg(long, value_parser = ugview::parse_vec3, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    #[arg(long, value_parser = view::parse_vec3, value_name = "X,Y,Z", allow_hyphen_values = true)]
     eye: Option<glam::DVec3>,
     /// Point looked at (default with --eye: the model's centre).
-    #[arg(long, value_parser = ugview::parse_vec3, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    #[arg(long, value_parser = view::parse_vec3, value_name = "X,Y,Z", allow_hyphen_values = true)]
     look: Option<glam::DVec3>,
     /// Up direction (default: the cam statement's, else +z).
-    #[arg(long, value_parser = ugview::parse_vec3, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    #[arg(long, value_parser = view::parse_vec3, value_name = "X,Y,Z", allow_hyphen_values = true)]
     up: Option<glam::DVec3>,
     /// Vertical field of view in degrees (default 45, or the cam statement's).
     #[arg(long, value_name = "DEG")]
@@ -78,7 +78,7 @@ struct Args {
     #[arg(long, default_value_t = 4, value_parser = parse_msaa)]
     msaa: u32,
     /// Background colour (linear RGB, 0..1).
-    #[arg(long, value_parser = ugview::parse_vec3, value_name = "R,G,B", default_value = "0,0,0")]
+    #[arg(long, value_parser = view::parse_vec3, value_name = "R,G,B", default_value = "0,0,0")]
     background: glam::DVec3,
     /// Graphics API.
     #[arg(long, value_enum, default_value = "auto")]
@@ -136,7 +136,7 @@ fn main() -> std::process::ExitCode {
         let t0 = std::time::Instant::now();
         let model = c.load_flat()?;
         let t_load = t0.elapsed();
-        let o = ugview::ViewOptions {
+        let o = view::ViewOptions {
             width: args.size.0,
             height: args.size.1,
             eye: args.eye,
@@ -148,8 +148,8 @@ fn main() -> std::process::ExitCode {
             cut_z: args.cut_z,
             exposure: args.exposure,
             tonemap: match args.tonemap {
-                TonemapArg::Clamp => ugview::ToneMap::Clamp,
-                TonemapArg::Reinhard => ugview::ToneMap::Reinhard,
+                TonemapArg::Clamp => view::ToneMap::Clamp,
+                TonemapArg::Reinhard => view::ToneMap::Reinhard,
             },
             false_colour: args.false_colour,
             range,
@@ -160,7 +160,7 @@ fn main() -> std::process::ExitCode {
         };
         // Usage errors (camera names, …) before the GPU is needed.
         let plan =
-            ugview::plan(&model, &o).map_err(|m| cli::Failure::input(format!("error: {m}")))?;
+            view::plan(&model, &o).map_err(|m| cli::Failure::input(format!("error: {m}")))?;
         drop(model);
         let t_plan = t0.elapsed();
         let backend = match args.gpu_backend {
@@ -176,7 +176,7 @@ fn main() -> std::process::ExitCode {
         c.verbose(format!("device: {}", g.describe()));
         let t_device = t0.elapsed();
         let pic =
-            ugview::draw(&g, plan, &o).map_err(|e| cli::Failure::runtime(format!("error: {e}")))?;
+            view::draw(&g, plan, &o).map_err(|e| cli::Failure::runtime(format!("error: {e}")))?;
         let t_draw = t0.elapsed();
         for n in &pic.notes {
             if n.starts_with("warning:") && !c.quiet {

@@ -38,7 +38,7 @@ struct Args {
     #[arg(short = 'e', long = "epsilon", value_parser = cli::parse_epsilon)]
     epsilon: Option<f64>,
     /// Largest angle between the normals of faces that are joined, in degrees.
-    #[arg(long, value_name = "DEGREES", default_value_t = ugvlmerge::DEFAULT_ANGLE, value_parser = parse_angle)]
+    #[arg(long, value_name = "DEGREES", default_value_t = clean::group::DEFAULT_ANGLE, value_parser = parse_angle)]
     angle: f64,
     /// Skip step 1 (merging nearly coincident vertices).
     #[arg(long)]
@@ -60,19 +60,17 @@ fn parse_angle(s: &str) -> Result<f64, String> {
 
 fn main() -> std::process::ExitCode {
     let args = Args::parse();
-    cli::run(|| {
-        let c = &args.common;
-        let model = c.load_flat()?;
-        let eps = cli::epsilon(args.epsilon, &model);
+    let c = &args.common;
+    cli::filter(c, args.epsilon, |model, eps| {
         c.verbose(format!("epsilon {eps:e}, angle {}°", args.angle));
-        let opts = ugvlmerge::Options {
+        let opts = clean::group::Options {
             eps,
             angle: args.angle,
             merge_vertices: !args.no_merge_vertices,
             split_edges: !args.no_split_edges,
             merge_faces: !args.no_merge_faces,
         };
-        let (out, st) = ugvlmerge::vlmerge(model, &opts)?;
+        let (out, st) = clean::group::vlmerge(model, &opts)?;
         if !c.quiet {
             for d in &st.dropped {
                 eprintln!("warning: face {}: {}; dropped", d.face, d.reason);
@@ -113,6 +111,6 @@ fn main() -> std::process::ExitCode {
             "{} faces, {} vertices out ({} unused vertices removed)",
             st.faces_out, st.vertices_out, st.unused_removed
         ));
-        c.write_model(&out)
+        Ok(out)
     })
 }

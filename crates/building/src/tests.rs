@@ -8,8 +8,8 @@ fn eps(m: &Model) -> f64 {
     1e-6 * (hi - lo).length()
 }
 
-fn check(m: &Model) -> ugcheck::Report {
-    ugcheck::check(m, eps(m))
+fn check(m: &Model) -> check::Report {
+    check::check(m, eps(m))
 }
 
 fn segments(x: usize, y: usize) -> usize {
@@ -132,7 +132,7 @@ fn nonplanar_count_equals_the_lifted_quads() {
             0
         );
         // Tessellated, nothing is left.
-        let (p, st) = ugplanar::planarize(&m, eps(&m));
+        let (p, st) = clean::planar::planarize(&m, eps(&m));
         assert_eq!(st.nonplanar, expect);
         let r = check(&p);
         assert_eq!(r.defects(), 0, "{}", r.text(false));

@@ -260,6 +260,32 @@ pub fn run(body: impl FnOnce() -> Result<(), Failure>) -> ExitCode {
     }
 }
 
+/// The skeleton every UG filter shares: read and flatten the input, settle
+/// the distance tolerance (`-e`, or [`RELATIVE_EPSILON`] of the model's
+/// size), run `body` (one library call and its report on stderr), write the
+/// model it returns, and turn the result into an exit status. Nothing is
+/// written unless `body` succeeded.
+///
+/// ```no_run
+/// # let common = cli::Common::default();
+/// std::process::exit(match cli::filter(&common, None, |model, eps| {
+///     common.verbose(format!("epsilon {eps:e}"));
+///     Ok(model)
+/// }) { _ => 0 });
+/// ```
+pub fn filter(
+    common: &Common,
+    explicit_epsilon: Option<f64>,
+    body: impl FnOnce(ug::Model, f64) -> Result<ug::Model, Failure>,
+) -> ExitCode {
+    run(|| {
+        let model = common.load_flat()?;
+        let eps = epsilon(explicit_epsilon, &model);
+        let out = body(model, eps)?;
+        common.write_model(&out)
+    })
+}
+
 /// The model-relative default epsilon: this fraction of the bounding-box diagonal.
 pub const RELATIVE_EPSILON: f64 = 1e-6;
 

@@ -150,6 +150,7 @@ use glam::DVec3;
 mod anchor;
 mod build;
 mod output;
+pub mod patch;
 mod refine;
 mod validate;
 mod write;

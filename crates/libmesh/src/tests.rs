@@ -62,7 +62,7 @@ fn leaf_at(m: &Mesh, p: PatchId, x: DVec3) -> ElemId {
 
 fn ugcheck_clean(src: &Model, m: &Mesh) {
     let out = m.to_model(src);
-    let r = ugcheck::check(&out, 1e-9);
+    let r = check::check(&out, 1e-9);
     assert!(r.tvertices.is_empty(), "T-vertices: {:?}", r.tvertices);
     assert!(r.degenerate.is_empty(), "degenerate: {:?}", r.degenerate);
     assert!(

@@ -380,7 +380,7 @@ fn check(src: &ug::Model, m: &Mesh, two_sided: bool) -> Result<(), TestCaseError
     };
     for drop in drops {
         let out = without_surface(m, &out, drop);
-        let r = ugcheck::check(&out, EPS);
+        let r = check::check(&out, EPS);
         prop_assert!(r.tvertices.is_empty(), "T-vertices: {:?}", r.tvertices);
         prop_assert!(r.degenerate.is_empty(), "degenerate: {:?}", r.degenerate);
         prop_assert!(

@@ -66,10 +66,10 @@ fn cornell(len: f64) -> (ug::Model, libmesh::Mesh) {
         .expect("the Cornell box parses")
         .model;
     let eps = cli::epsilon(None, &m);
-    let (m, _) = ugplanar::planarize(&m, eps);
-    let (m, _) = ugcut::cut(
+    let (m, _) = clean::planar::planarize(&m, eps);
+    let (m, _) = libmesh::patch::cut(
         &m,
-        ugcut::Options {
+        libmesh::patch::Options {
             len,
             eps,
             angle: 25.0,

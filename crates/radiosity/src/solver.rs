@@ -1284,13 +1284,13 @@ mod tests {
             f s3 (k2 k3 k7 k6) g; f s4 (k3 k0 k4 k7) g;
             f lamp (l0 l3 l2 l1) lamp;";
         let model = ug::parse(src.as_bytes(), "t").unwrap().model;
-        let opts = ugcut::Options {
+        let opts = libmesh::patch::Options {
             len: 0.5,
             eps: 1e-9,
             angle: 25.0,
             quads: true,
         };
-        let model = ugcut::cut(&model, opts).0;
+        let model = libmesh::patch::cut(&model, opts).0;
         let mesh = Mesh::from_model(&model, 1e-9).unwrap();
         let vis = RayVisibility::new(&mesh);
         let solver = Solver::new(mesh, &model.materials, &vis, Options::default());

@@ -3,11 +3,11 @@
 /// A UG text cut into patches of edge length about `len` (ugcut, epsilon 1e-9).
 pub fn patches(src: &str, len: f64) -> ug::Model {
     let m = ug::parse(src.as_bytes(), "test").unwrap().model;
-    let opts = ugcut::Options {
+    let opts = libmesh::patch::Options {
         len,
         eps: 1e-9,
         angle: 25.0,
         quads: true,
     };
-    ugcut::cut(&m, opts).0
+    libmesh::patch::cut(&m, opts).0
 }

@@ -19,7 +19,7 @@ fn bench(c: &mut Criterion) {
     for faces in [1_000, 10_000] {
         let m = model(faces);
         let eps = cli::epsilon(None, &m);
-        let (_, st) = ugisect::isect(&m, eps).expect("flat model");
+        let (_, st) = clean::isect::isect(&m, eps).expect("flat model");
         eprintln!(
             "{} faces: {} intersecting pairs, {} faces cut into {} pieces",
             m.faces.len(),
@@ -29,7 +29,7 @@ fn bench(c: &mut Criterion) {
         );
         g.bench_function(
             format!("isect_{}_faces_{}_pairs", m.faces.len(), st.pairs),
-            |b| b.iter(|| ugisect::isect(&m, eps)),
+            |b| b.iter(|| clean::isect::isect(&m, eps)),
         );
     }
     g.finish();

@@ -30,8 +30,8 @@ pub mod color;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
+use crate::obj::{Namer, Tok, Warnings, quote, sanitize, sanitize_material, tokenize};
 use glam::{DAffine3, DMat3, DVec3};
-use obj2ug::{Namer, Tok, Warnings, quote, sanitize, sanitize_material, tokenize};
 use rustc_hash::{FxHashMap, FxHashSet};
 use ug::{
     Defmat, Diagnostic, Face, Material, MaterialDef, MaterialId, Model, Pos, Vertex, VertexId,

@@ -17,9 +17,9 @@
 //!
 //! Vertices that only removed faces used are removed too.
 
+use check::PairKind;
 use geom::DVec3;
 use ug::{FaceId, Item, Model};
-use ugcheck::PairKind;
 use winged::Mesh;
 
 /// What was removed and why.
@@ -100,7 +100,7 @@ pub fn surface_area(mesh: &Mesh, f: FaceId, eps: f64) -> f64 {
 
 /// Removes one face of every coincident pair of a flat model.
 pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
-    let (faces, geoms) = ugcheck::face_geoms(m);
+    let (faces, geoms) = check::face_geoms(m);
     let points = |f: FaceId| -> Vec<Vec<DVec3>> {
         m.faces[f.idx()]
             .contours
@@ -108,7 +108,7 @@ pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
             .map(|c| c.iter().map(|&v| m.pos(v)).collect())
             .collect()
     };
-    let pairs: Vec<(usize, usize)> = ugcheck::classify_pairs(&geoms, eps)
+    let pairs: Vec<(usize, usize)> = check::classify_pairs(&geoms, eps)
         .into_iter()
         .filter(|p| p.2 == PairKind::Coincident)
         .map(|(i, j, _)| (i, j))

@@ -17,12 +17,10 @@
 //! the points where the cuts meet neighbouring faces' edges are inserted into
 //! those edges (the grouper's T-vertex step), so no T-vertex is left.
 
-pub mod pieces;
-
+use check::PairKind;
 use geom::DVec2;
 use geom::overlap::split_by;
 use ug::{Item, Model};
-use ugcheck::PairKind;
 
 use crate::pieces::{Rebuild, face_geoms, perimeter, segments};
 
@@ -38,7 +36,7 @@ pub struct Stats {
 /// Cuts the coplanar overlapping faces of a flat model.
 pub fn copl(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
     let (faces, geoms) = face_geoms(m);
-    let pairs: Vec<(usize, usize)> = ugcheck::classify_pairs(&geoms, eps)
+    let pairs: Vec<(usize, usize)> = check::classify_pairs(&geoms, eps)
         .into_iter()
         .filter(|p| matches!(p.2, PairKind::Overlap(_)))
         .map(|(i, j, _)| (i, j))
@@ -98,7 +96,7 @@ pub fn copl(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
         let base = face.name.clone().unwrap_or_else(|| format!("f{}", k + 1));
         let note = format!(
             "ugcopl origin {base} area {}",
-            ugclean::surface_area(
+            crate::coincident::surface_area(
                 mesh.get_or_init(|| winged::Mesh::from_model(m.clone())),
                 *f,
                 eps
@@ -117,11 +115,11 @@ pub fn copl(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
     }
     stats.new_vertices = rb.new_vertices;
     // Where the cuts meet neighbouring edges: insert the points (no T-vertex).
-    let opts = ugvlmerge::Options {
+    let opts = crate::group::Options {
         merge_faces: false,
-        ..ugvlmerge::Options::new(eps)
+        ..crate::group::Options::new(eps)
     };
-    let (out, vst) = ugvlmerge::vlmerge(rb.out, &opts)?;
+    let (out, vst) = crate::group::vlmerge(rb.out, &opts)?;
     stats.tvertices = vst.tvertices;
     Ok((out, stats))
 }

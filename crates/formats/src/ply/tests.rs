@@ -305,9 +305,9 @@ fn round_trips_ug2ply_output() {
         f floor (a b c d) floor;\nf (a d c) floor;\n";
     let m = ug::parse(src.as_bytes(), "<t>").unwrap().model;
     for binary in [false, true] {
-        let ply = ug2ply::to_ply(
+        let ply = crate::ply::write::to_ply(
             &m,
-            &ug2ply::PlyOptions {
+            &crate::ply::write::PlyOptions {
                 binary,
                 ..Default::default()
             },
@@ -336,7 +336,7 @@ fn round_trips_ug2ply_output() {
     )
     .unwrap()
     .model;
-    let ply = ug2ply::to_ply(&m, &Default::default());
+    let ply = crate::ply::write::to_ply(&m, &Default::default());
     let c = conv(&ply.bytes).unwrap();
     let got = c.model.materials[0].diffuse();
     for (a, b) in got.iter().zip([0.63, 0.065, 0.05]) {

@@ -16,12 +16,12 @@
 //!
 //! Coplanar pairs are left to `ugcopl`.
 
+use crate::pieces::{Rebuild, face_geoms, perimeter, segments};
+use check::PairKind;
 use geom::intersect::FaceGeom;
 use geom::overlap::split_by;
 use geom::{DVec2, DVec3};
 use ug::{Item, Model};
-use ugcheck::PairKind;
-use ugcopl::pieces::{Rebuild, face_geoms, perimeter, segments};
 
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Stats {
@@ -47,7 +47,7 @@ fn plane_line(a: &FaceGeom, b: &FaceGeom) -> Option<(DVec3, DVec3)> {
 /// Cuts the intersecting faces of a flat model.
 pub fn isect(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
     let (faces, geoms) = face_geoms(m);
-    let pairs: Vec<(usize, usize)> = ugcheck::classify_pairs(&geoms, eps)
+    let pairs: Vec<(usize, usize)> = check::classify_pairs(&geoms, eps)
         .into_iter()
         .filter(|p| p.2 == PairKind::Intersect)
         .map(|(i, j, _)| (i, j))
@@ -138,11 +138,11 @@ pub fn isect(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
         stats.pieces += rb.pieces(face, &base, "i", pieces, &g.frame, &features, tol, None);
     }
     stats.new_vertices = rb.new_vertices;
-    let opts = ugvlmerge::Options {
+    let opts = crate::group::Options {
         merge_faces: false,
-        ..ugvlmerge::Options::new(eps)
+        ..crate::group::Options::new(eps)
     };
-    let (out, vst) = ugvlmerge::vlmerge(rb.out, &opts)?;
+    let (out, vst) = crate::group::vlmerge(rb.out, &opts)?;
     stats.tvertices = vst.tvertices;
     Ok((out, stats))
 }

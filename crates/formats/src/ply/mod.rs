@@ -35,10 +35,12 @@
 //! Errors are `file:line:col: error: …` in the header and in ASCII data, and
 //! `file:byte N: error: …` in binary data.
 
+pub mod write;
+
 use std::fmt;
 
+use crate::obj::{Namer, Warnings};
 use glam::DVec3;
-use obj2ug::{Namer, Warnings};
 use rustc_hash::{FxHashMap, FxHashSet};
 use ug::{Face, Material, MaterialDef, MaterialId, Model, Vertex, VertexId};
 
@@ -235,7 +237,7 @@ fn end_col(ws: &[Word]) -> u32 {
 
 /// Quotes a word for a message (shortened, control characters escaped).
 fn quote(t: &[u8]) -> String {
-    obj2ug::quote(t)
+    crate::obj::quote(t)
 }
 
 /// Lines of `src` from byte `from`: (line bytes without the newline, start offset).

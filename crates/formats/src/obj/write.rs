@@ -19,9 +19,9 @@
 
 use std::io::Write as _;
 
+use crate::ply::write::{Mesh, MeshOptions, srgb_encode};
 use rustc_hash::FxHashMap;
 use ug::{MaterialId, Model, VertexId};
-use ug2ply::{Mesh, MeshOptions, srgb_encode};
 
 /// Options of the OBJ writer.
 #[derive(Clone, Debug, Default)]
@@ -145,11 +145,11 @@ pub fn to_obj(m: &Model, opts: &ObjOptions) -> ObjOutput {
                         .color
                         .and_then(|c| m.materials.get(c.idx()))
                         .map_or([0.0; 3], |c| c.diffuse());
-                    mesh.vertices.push(ug2ply::MeshVertex {
+                    mesh.vertices.push(crate::ply::write::MeshVertex {
                         source: v,
                         pos: vx.pos,
                         radiosity: mesh.lit.then_some(b),
-                        display: b.map(|x| ug2ply::radiance_display(x, opts.exposure)),
+                        display: b.map(|x| crate::ply::write::radiance_display(x, opts.exposure)),
                     });
                 }
                 l.push(k);

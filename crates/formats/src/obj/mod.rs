@@ -25,6 +25,7 @@ use rustc_hash::{FxHashMap, FxHashSet};
 use ug::{Defmat, Diagnostic, Face, Item, Material, MaterialDef, Model, Pos, Vertex, VertexId};
 
 pub mod names;
+pub mod write;
 
 pub use names::{Namer, sanitize, sanitize_material};
 

@@ -71,7 +71,7 @@ fn bench(c: &mut Criterion) {
     let eps = cli::epsilon(None, &m);
     let mut g = c.benchmark_group("ugcheck");
     g.sample_size(10);
-    g.bench_function("check_10k_faces", |b| b.iter(|| ugcheck::check(&m, eps)));
+    g.bench_function("check_10k_faces", |b| b.iter(|| check::check(&m, eps)));
     g.finish();
 }
 

@@ -9,7 +9,7 @@ use geom::{DVec2, DVec3, Frame};
 use rustc_hash::{FxHashMap, FxHashSet};
 use ug::{Face, FaceId, Item, Model, Vertex, VertexId};
 
-pub use ugcheck::face_geoms;
+pub use check::face_geoms;
 
 /// Total length of a face's contours in 2-D.
 pub fn perimeter(contours: &[Vec<DVec2>]) -> f64 {

@@ -8,8 +8,8 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 
-fn opts(len: f64, eps: f64) -> ugcut::Options {
-    ugcut::Options {
+fn opts(len: f64, eps: f64) -> libmesh::patch::Options {
+    libmesh::patch::Options {
         len,
         eps,
         angle: 25.0,
@@ -27,14 +27,14 @@ fn bench(c: &mut Criterion) {
     let mut len = 1.0;
     let mut best = (usize::MAX, len);
     for _ in 0..4 {
-        let (_, trial) = ugcut::cut(&m, opts(len, eps));
+        let (_, trial) = libmesh::patch::cut(&m, opts(len, eps));
         if trial.patches.abs_diff(100_000) < best.0 {
             best = (trial.patches.abs_diff(100_000), len);
         }
         len *= (trial.patches as f64 / 100_000.0).sqrt();
     }
     let len = best.1;
-    let (_, st) = ugcut::cut(&m, opts(len, eps));
+    let (_, st) = libmesh::patch::cut(&m, opts(len, eps));
     assert!(st.failed.is_empty());
     eprintln!(
         "ugcut building: {} faces ({x} × {y} rooms), len {len:.4} → {} patches ({} quads, {} triangles, {} grid cells), edges {:.3}..{:.3}, worst angle {:.1}°",
@@ -55,7 +55,7 @@ fn bench(c: &mut Criterion) {
     .expect("parses")
     .model;
     let weps = cli::epsilon(None, &wall);
-    let (_, ws) = ugcut::cut(&wall, opts(1.0, weps));
+    let (_, ws) = libmesh::patch::cut(&wall, opts(1.0, weps));
     assert_eq!(ws.grid_cells, 100_000);
     assert_eq!(ws.patches, 100_000);
     eprintln!("ugcut wall: 500 × 200, len 1 → {} patches", ws.patches);
@@ -64,11 +64,11 @@ fn bench(c: &mut Criterion) {
     g.sample_size(10);
     g.throughput(Throughput::Elements(st.patches as u64));
     g.bench_function("building_10k_faces_100k_patches", |b| {
-        b.iter(|| ugcut::cut(&m, opts(len, eps)))
+        b.iter(|| libmesh::patch::cut(&m, opts(len, eps)))
     });
     g.throughput(Throughput::Elements(ws.patches as u64));
     g.bench_function("wall_100k_cells", |b| {
-        b.iter(|| ugcut::cut(&wall, opts(1.0, weps)))
+        b.iter(|| libmesh::patch::cut(&wall, opts(1.0, weps)))
     });
     g.finish();
 }

@@ -18,8 +18,8 @@ fn bench(c: &mut Criterion) {
     }
     assert!(m.faces.len() > 9_900, "{}", m.faces.len());
     let eps = cli::epsilon(None, &m);
-    let opts = ugvlmerge::Options::new(eps);
-    let (out, st) = ugvlmerge::vlmerge(m.clone(), &opts).expect("flat model");
+    let opts = clean::group::Options::new(eps);
+    let (out, st) = clean::group::vlmerge(m.clone(), &opts).expect("flat model");
     assert!(st.vertices_merged > 0 && st.tvertices > 0 && st.faces_joined > 0);
     assert!(out.faces.len() < m.faces.len());
     let mut g = c.benchmark_group("ugvlmerge");
@@ -27,7 +27,7 @@ fn bench(c: &mut Criterion) {
     g.bench_function("vlmerge_10k_faces", |b| {
         b.iter_batched(
             || m.clone(),
-            |m| ugvlmerge::vlmerge(m, &opts),
+            |m| clean::group::vlmerge(m, &opts),
             BatchSize::LargeInput,
         )
     });

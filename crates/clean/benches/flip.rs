@@ -1,4 +1,4 @@
-//! Benchmark: automatic orientation (`ugflip::orient`, default options) on a
+//! Benchmark: automatic orientation (`clean::orient::orient`, default options) on a
 //! generated ~10,000-face building (crates/building): rooms, a ceiling light
 //! and two furniture boxes per room, 30% of all faces reversed. In faces per
 //! second.
@@ -14,12 +14,12 @@ fn bench(c: &mut Criterion) {
     };
     let (x, y) = building::rooms_for_faces(10_000, &dirt);
     let m = building::generate(x, y, &dirt, 1);
-    let opts = ugflip::Options {
+    let opts = clean::orient::Options {
         eps: cli::epsilon(None, &m),
-        viewpoints: ugflip::camera_eyes(&m),
-        ..ugflip::Options::default()
+        viewpoints: clean::orient::camera_eyes(&m),
+        ..clean::orient::Options::default()
     };
-    let (out, r) = ugflip::orient(m.clone(), &opts).expect("no names asked for");
+    let (out, r) = clean::orient::orient(m.clone(), &opts).expect("no names asked for");
     assert!(r.flipped() > 0);
     // How many faces end as the generator meant them (a face's cycle may start elsewhere).
     let meant = building::generate(
@@ -59,7 +59,7 @@ fn bench(c: &mut Criterion) {
     g.bench_function("orient_10k_faces_30pct_flipped", |b| {
         b.iter_batched(
             || m.clone(),
-            |m| ugflip::orient(m, &opts),
+            |m| clean::orient::orient(m, &opts),
             BatchSize::LargeInput,
         )
     });
