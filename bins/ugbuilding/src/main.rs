@@ -8,7 +8,9 @@ Examples:
   ugbuilding --faces 10000 --messy --seed 7 -o m.ug     about 10,000 faces with every kind of dirt
   ugbuilding --faces 1000 --nonplanar 0.2 | ugplanar -v   20% of the faces non-planar
   ugbuilding --rooms 3 --lights --furniture 2 | ugcheck   lit, furnished rooms; furniture stands on the floors
-  ugbuilding --faces 10000 --messy | ugplanar | ugflip | ugvlmerge | ugcut -l 1 | ugrad --max-shots 100";
+  ugbuilding --faces 10000 --messy | ugplanar | ugflip | ugvlmerge | ugcut -l 1 | ugrad --max-shots 100
+  ugbuilding --cad --faces 8600 --storeys 2 -o house.ug   drawn as CAD exports it (slabs, wall runs, openings, ...)
+  ugbuilding --cad --rooms 2 --storeys 3 --seed 5         a small three-storey one";
 
 /// Generate a CAD-like building as UniGrafix: a grid of 4 × 5 × 3 rooms
 /// (metres) with floors of 2 × 2 quads, walls of a lower and an upper face,
@@ -19,6 +21,14 @@ Examples:
 /// faces, non-planar floor quads, nearly coincident vertices, T-vertices;
 /// and ceiling lights (emitters) and furniture boxes standing on the floors.
 /// Fractions are exact: round(fraction × n) items are chosen.
+///
+/// --cad draws a different building, the way CAD programs export one:
+/// slabs, walls as box slabs in overlapping runs that interpenetrate at the
+/// junctions, doors and windows of piers, sills, lintels and glass, tiled
+/// floors, desks, cabinets pushed into walls and rotated boxes, rugs, papers
+/// and pictures lying on other faces, columns and vaults with non-planar
+/// faces, flush ceiling panels and hanging light boxes, several storeys;
+/// then random flips, duplicate faces and vertex jitter (1e-7 of the size).
 #[derive(Parser, Debug)]
 #[command(version, after_help = EXAMPLES)]
 struct Args {
@@ -36,6 +46,13 @@ struct Args {
     /// About this many faces: the nearly square grid of rooms that comes nearest.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=50_000_000))]
     faces: Option<u64>,
+    /// Draw the CAD-like building (see above); --rooms, --rooms-x/-y or
+    /// --faces size each storey's grid; --flipped and --furniture apply.
+    #[arg(long, conflicts_with_all = ["messy", "grouper"])]
+    cad: bool,
+    /// Storeys of the --cad building.
+    #[arg(long, default_value_t = 2, requires = "cad", value_parser = clap::value_parser!(u32).range(1..=50))]
+    storeys: u32,
     /// Seed of the random choices.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -98,6 +115,45 @@ fn main() -> std::process::ExitCode {
             return Err(cli::Failure::input(
                 "error: ugbuilding reads no input (did you mean -o FILE?)",
             ));
+        }
+        if args.cad {
+            let storeys = args.storeys as usize;
+            let mut cfg = match (args.rooms, args.rooms_x.zip(args.rooms_y), args.faces) {
+                (Some(n), _, _) => building::Cad {
+                    rooms_x: n as usize,
+                    rooms_y: n as usize,
+                    storeys,
+                    ..building::Cad::default()
+                },
+                (_, Some((x, y)), _) => building::Cad {
+                    rooms_x: x as usize,
+                    rooms_y: y as usize,
+                    storeys,
+                    ..building::Cad::default()
+                },
+                (_, _, Some(f)) => building::Cad::for_faces(f as usize, storeys, args.seed),
+                _ => building::Cad {
+                    storeys,
+                    ..building::Cad::default()
+                },
+            };
+            if let Some(v) = args.flipped {
+                cfg.flipped = v;
+            }
+            if let Some(v) = args.furniture {
+                cfg.furniture = v as usize;
+            }
+            let model = building::cad(&cfg, args.seed);
+            c.verbose(format!(
+                "{} storeys of {} × {} rooms, {} faces, {} vertices; seed {}",
+                cfg.storeys,
+                cfg.rooms_x,
+                cfg.rooms_y,
+                model.faces.len(),
+                model.vertices.len(),
+                args.seed
+            ));
+            return c.write_model(&model);
         }
         let mut dirt = if args.messy {
             building::Dirt::messy()

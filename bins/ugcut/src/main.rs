@@ -23,7 +23,7 @@ struct Args {
     #[command(flatten)]
     common: cli::Common,
     /// Desired patch edge length: model units, or a percentage of the bounding-box diagonal ("2%").
-    #[arg(short = 'l', long = "length", value_name = "LEN", required = true)]
+    #[arg(short = 'l', long = "length", value_name = "LEN", default_value = "2%")]
     len: String,
     /// Distance tolerance in model units (default: 1e-6 of the bounding-box diagonal).
     #[arg(short = 'e', long = "epsilon", value_parser = cli::parse_epsilon)]
@@ -41,6 +41,51 @@ fn parse_angle(s: &str) -> Result<f64, String> {
         Ok(v) if (0.0..=33.0).contains(&v) => Ok(v),
         _ => Err(format!("'{s}' is not an angle between 0 and 33 degrees")),
     }
+}
+
+/// Warnings for what the preparation changed: at most five of a kind (all
+/// with -v), then a count.
+fn report(st: &libmesh::patch::Stats, all: bool) {
+    let limit = if all { usize::MAX } else { 5 };
+    let list = |items: Vec<String>, more: &str| {
+        for i in items.iter().take(limit) {
+            eprintln!("warning: {i}");
+        }
+        if items.len() > limit {
+            eprintln!(
+                "warning: {} more {more} (-v lists them)",
+                items.len() - limit
+            );
+        }
+    };
+    list(
+        st.repaired
+            .iter()
+            .map(|(f, n)| format!("face {f}: its contours cross or touch themselves; repaired into {n} sound piece(s)"))
+            .collect(),
+        "faces repaired",
+    );
+    list(
+        st.tessellated
+            .iter()
+            .map(|f| format!("face {f} is not planar; folded into triangles (run ugplanar first)"))
+            .collect(),
+        "non-planar faces folded",
+    );
+    list(
+        st.dropped
+            .iter()
+            .map(|(f, why)| format!("face {f}: {why}; left out"))
+            .collect(),
+        "faces left out",
+    );
+    list(
+        st.plain
+            .iter()
+            .map(|f| format!("face {f}: meshed by a plain triangulation (the grid did not fit)"))
+            .collect(),
+        "faces meshed plainly",
+    );
 }
 
 fn main() -> std::process::ExitCode {
@@ -69,14 +114,19 @@ fn main() -> std::process::ExitCode {
             angle: args.angle,
             quads: !args.triangles,
         };
-        let (out, st) = libmesh::patch::cut(&model, opts);
+        let (out, st) = libmesh::patch::cut(&model, opts)
+            .map_err(|e| cli::Failure::runtime(format!("error: {e}")))?;
         if !c.quiet {
-            for f in &st.failed {
-                eprintln!(
-                    "warning: face {f} could not be meshed (its contours cross or touch); passed through unchanged"
-                );
-            }
+            report(&st, c.verbose > 0);
         }
+        c.verbose(format!(
+            "welded {} vertices, inserted {} T-vertices; repaired {} faces, folded {} non-planar, left out {}",
+            st.welded,
+            st.tvertices,
+            st.repaired.len(),
+            st.tessellated.len(),
+            st.dropped.len()
+        ));
         c.verbose(format!(
             "length {len}, epsilon {eps:e}: {} faces → {} patches ({} quads of which {} grid cells, {} triangles); edges min {:.4} mean {:.4} max {:.4}; worst triangle angle {:.1}°",
             st.faces, st.patches, st.quads, st.grid_cells, st.triangles, st.min_edge, st.mean_edge, st.max_edge, st.worst_angle

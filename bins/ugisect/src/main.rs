@@ -30,9 +30,15 @@ fn main() -> std::process::ExitCode {
     let c = &args.common;
     cli::filter(c, args.epsilon, |model, eps| {
         let (out, st) = clean::isect::isect(&model, eps)?;
+        if st.tessellated > 0 && !c.quiet {
+            eprintln!(
+                "warning: {} faces are not planar; folded into triangles first (run ugplanar before ugisect)",
+                st.tessellated
+            );
+        }
         c.verbose(format!(
-            "epsilon {eps:e}; {} intersecting pairs; {} faces cut into {} pieces; {} new vertices; {} T-vertices inserted",
-            st.pairs, st.faces_cut, st.pieces, st.new_vertices, st.tvertices
+            "epsilon {eps:e}; {} intersecting pairs, {} cut segments; {} faces cut into {} pieces ({} cuts extended); {} new vertices; {} T-vertices inserted; {} round(s)",
+            st.pairs, st.segments, st.faces_cut, st.pieces, st.extensions, st.new_vertices, st.tvertices, st.rounds
         ));
         Ok(out)
     })

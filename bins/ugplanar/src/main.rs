@@ -33,10 +33,13 @@ fn main() -> std::process::ExitCode {
         c.verbose(format!("epsilon {eps:e}"));
         let (out, st) = clean::planar::planarize(&model, eps);
         if !c.quiet {
-            for f in &st.failed {
+            for f in &st.repaired {
                 eprintln!(
-                    "warning: face {f} is not planar but could not be triangulated (its projection crosses itself); left unchanged"
+                    "warning: face {f} is not planar and its projection crosses or touches itself; repaired on its best-fit plane (even-odd region) and triangulated"
                 );
+            }
+            for f in &st.failed {
+                eprintln!("warning: face {f} is not planar and encloses no area; left out");
             }
         }
         c.verbose(format!(

@@ -61,6 +61,10 @@
 //! with a T-vertex and nearly coincident vertices, every ceiling with its own
 //! corners.
 
+pub mod cad;
+
+pub use cad::{Cad, cad};
+
 use glam::DVec3;
 use ug::{Defmat, Face, Item, Material, MaterialDef, MaterialId, Model, Vertex, VertexId};
 

@@ -12,7 +12,7 @@
 use std::fmt::Write as _;
 
 use geom::intersect::{FaceGeom, Relation, relate};
-use geom::overlap::{overlap_area, region_area};
+use geom::overlap::coverage_near;
 use geom::{BoxIndex, DVec2, DVec3, Plane, orient2d, point_segment_distance};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -515,8 +515,11 @@ fn face_checks(cx: &Ctx<'_>, f: FaceId) -> FaceFindings {
     let (lo, hi) = geom::index::bbox(pts.iter().flatten().copied(), 0.0);
     let size = (hi - lo).length();
     let outer_area = geom::newell_normal(&pts[0]).length() / 2.0;
-    if reason.is_none() && outer_area <= eps * size {
+    if reason.is_none() && outer_area <= eps * eps {
         reason = Some("zero area (its vertices are collinear)".to_string());
+    }
+    if reason.is_none() {
+        reason = shape_defect(cx, face, &pts, eps);
     }
     if let Some(r) = reason {
         return (
@@ -570,6 +573,104 @@ fn face_checks(cx: &Ctx<'_>, f: FaceId) -> FaceFindings {
         reason,
     });
     (None, np, patch, FaceGeom::new(pts))
+}
+
+/// What is wrong with the shape of a face whose contours each have three
+/// distinct vertices and no zero-length edge: a contour that visits a vertex
+/// twice (a spike `(a b a c)` or a pinch), two edges that cross (a contour
+/// crossing itself or another), or a vertex within `eps` of an edge it is
+/// not an end of (the face is narrower than epsilon there: a sliver, a
+/// neck, a contour touching itself or another). Decided in the face's
+/// best-fit plane, crossings exactly. Contours that share a vertex (a hole
+/// hung on the outer contour at one vertex) are fine.
+fn shape_defect(cx: &Ctx<'_>, face: &ug::Face, pts: &[Vec<DVec3>], eps: f64) -> Option<String> {
+    for (ci, c) in face.contours.iter().enumerate() {
+        let mut seen: Vec<VertexId> = c.clone();
+        seen.sort_unstable();
+        if let Some(w) = seen.windows(2).find(|w| w[0] == w[1]) {
+            return Some(format!(
+                "contour {} visits vertex {} twice",
+                ci + 1,
+                cx.vname(w[0])
+            ));
+        }
+    }
+    let g = FaceGeom::new(pts.to_vec())?;
+    // Edges as (vertex ids, 2-D ends).
+    let mut edges: Vec<([VertexId; 2], DVec2, DVec2)> = Vec::new();
+    for (ci, c) in face.contours.iter().enumerate() {
+        let n = c.len();
+        for i in 0..n {
+            let j = (i + 1) % n;
+            edges.push(([c[i], c[j]], g.contours_2d[ci][i], g.contours_2d[ci][j]));
+        }
+    }
+    let mut verts: Vec<(VertexId, DVec2)> = face
+        .contours
+        .iter()
+        .zip(&g.contours_2d)
+        .flat_map(|(c, c2)| c.iter().copied().zip(c2.iter().copied()))
+        .collect();
+    verts.sort_by_key(|v| v.0);
+    verts.dedup_by_key(|v| v.0);
+    let index = (edges.len() > 24).then(|| {
+        BoxIndex::new(edges.iter().enumerate().map(|(k, &(_, a, b))| {
+            (
+                (a.min(b) - DVec2::splat(eps)).extend(0.0),
+                (a.max(b) + DVec2::splat(eps)).extend(0.0),
+                k as u32,
+            )
+        }))
+    });
+    let near = |lo: DVec2, hi: DVec2| -> Vec<usize> {
+        match &index {
+            Some(ix) => ix
+                .query(lo.extend(0.0), hi.extend(0.0))
+                .into_iter()
+                .map(|k| k as usize)
+                .collect(),
+            None => (0..edges.len()).collect(),
+        }
+    };
+    for (i, &(ev, a, b)) in edges.iter().enumerate() {
+        for j in near(a.min(b), a.max(b)) {
+            if j <= i {
+                continue;
+            }
+            let (fv, c, d) = edges[j];
+            if ev.iter().any(|v| fv.contains(v)) {
+                continue;
+            }
+            if geom::segments_2d(a, b, c, d) == geom::SegmentContact::Proper {
+                return Some(format!(
+                    "edges {}-{} and {}-{} cross",
+                    cx.vname(ev[0]),
+                    cx.vname(ev[1]),
+                    cx.vname(fv[0]),
+                    cx.vname(fv[1])
+                ));
+            }
+        }
+    }
+    for &(v, p) in &verts {
+        for k in near(p - DVec2::splat(eps), p + DVec2::splat(eps)) {
+            let (ev, a, b) = edges[k];
+            if ev.contains(&v) {
+                continue;
+            }
+            let d = point_segment_distance(p.extend(0.0), a.extend(0.0), b.extend(0.0)).0;
+            if d <= eps {
+                return Some(format!(
+                    "narrower than epsilon: vertex {} lies {} from edge {}-{}",
+                    cx.vname(v),
+                    num(d),
+                    cx.vname(ev[0]),
+                    cx.vname(ev[1])
+                ));
+            }
+        }
+    }
+    None
 }
 
 /// T-vertices among the non-degenerate faces (`geoms[k]` is `None` for a
@@ -671,6 +772,20 @@ pub enum PairKind {
 /// degenerate face, which takes part in no pair. In order of (i, j), the same
 /// at any thread count.
 pub fn classify_pairs(geoms: &[Option<FaceGeom>], eps: f64) -> Vec<(usize, usize, PairKind)> {
+    classify(geoms, eps, true)
+}
+
+/// The intersecting pairs only (what `ugisect` cuts): coplanar pairs are
+/// not measured.
+pub fn intersecting_pairs(geoms: &[Option<FaceGeom>], eps: f64) -> Vec<(usize, usize)> {
+    classify(geoms, eps, false)
+        .into_iter()
+        .filter(|p| p.2 == PairKind::Intersect)
+        .map(|(i, j, _)| (i, j))
+        .collect()
+}
+
+fn classify(geoms: &[Option<FaceGeom>], eps: f64, coplanar: bool) -> Vec<(usize, usize, PairKind)> {
     let boxes: Vec<(DVec3, DVec3, u32)> = geoms
         .iter()
         .enumerate()
@@ -698,6 +813,7 @@ pub fn classify_pairs(geoms: &[Option<FaceGeom>], eps: f64) -> Vec<(usize, usize
                     .expect("indexed faces have geometry");
                 let kind = match relate(ga, gb, eps) {
                     Relation::Intersect => Some(PairKind::Intersect),
+                    Relation::Coplanar if !coplanar => None,
                     Relation::Coplanar => {
                         let a2: &[Vec<DVec2>] = &ga.contours_2d;
                         let b2: Vec<Vec<DVec2>> = gb
@@ -705,12 +821,14 @@ pub fn classify_pairs(geoms: &[Option<FaceGeom>], eps: f64) -> Vec<(usize, usize
                             .iter()
                             .map(|c| c.iter().map(|&p| ga.frame.to_2d(p)).collect())
                             .collect();
-                        let ov = overlap_area(a2, &b2);
-                        let tol = eps * (perimeter(a2) + perimeter(&b2));
+                        // Snap rounding at epsilon drops every sliver
+                        // narrower than epsilon: what is left is a real
+                        // overlap, however small.
+                        let (cov, clipped) = coverage_near(a2, &b2, eps);
+                        let ov = cov.common;
+                        let tol = eps * eps;
                         if ov > tol {
-                            let (area_a, area_b) = (region_area(a2), region_area(&b2));
-                            let same_region =
-                                (area_a - ov).abs() <= tol && (area_b - ov).abs() <= tol;
+                            let same_region = !clipped && cov.only_a <= tol && cov.only_b <= tol;
                             let same_side = ga.plane.n.dot(gb.plane.n) > 0.0;
                             Some(match (same_region, same_side) {
                                 (true, true) => PairKind::Coincident,
@@ -756,14 +874,4 @@ pub fn surface_area(pts: &[Vec<DVec3>], nonplanar: bool) -> f64 {
         return geom::triangulate::triangles_area(&flat, &t);
     }
     geom::face_area(pts).abs()
-}
-
-fn perimeter(c: &[Vec<DVec2>]) -> f64 {
-    c.iter()
-        .map(|r| {
-            (0..r.len())
-                .map(|i| (r[(i + 1) % r.len()] - r[i]).length())
-                .sum::<f64>()
-        })
-        .sum()
 }

@@ -62,40 +62,55 @@ fn origins(m: &Model) -> Vec<Option<f64>> {
     out
 }
 
-/// Area of the connected coplanar same-material surface a face belongs to
-/// (faces reached through shared edges, same material and orientation, all
-/// vertices within `eps` of the face's plane).
-pub fn surface_area(mesh: &Mesh, f: FaceId, eps: f64) -> f64 {
-    let Some(plane) = mesh.face_plane(f) else {
-        return 0.0;
-    };
-    let mat = mesh.face(f).material;
-    let same = |g: FaceId| -> bool {
-        if mesh.face(g).material != mat {
-            return false;
+/// Area of the connected coplanar same-material surface every face belongs
+/// to (indexed by face id; 0 for removed faces): faces reached through
+/// shared edges with the same material and orientation and all vertices
+/// within `eps` of the plane of the surface's first face (in statement
+/// order), found once for the whole model.
+pub fn surface_areas(mesh: &Mesh, eps: f64) -> Vec<f64> {
+    let n = mesh.model().faces.len();
+    let mut group = vec![usize::MAX; n];
+    let mut areas: Vec<f64> = Vec::new();
+    for f in mesh.faces() {
+        if group[f.idx()] != usize::MAX {
+            continue;
         }
-        let Some(pg) = mesh.face_plane(g) else {
-            return false;
+        let g = areas.len();
+        group[f.idx()] = g;
+        let mut total = mesh.face_area(f).abs();
+        let (Some(plane), mat) = (mesh.face_plane(f), mesh.face(f).material) else {
+            areas.push(total);
+            continue;
         };
-        pg.n.dot(plane.n) > 0.0
-            && mesh
-                .face_points(g)
-                .iter()
-                .flatten()
-                .all(|&p| plane.dist(p).abs() <= eps)
-    };
-    let mut seen = vec![f];
-    let mut k = 0;
-    while k < seen.len() {
-        let g = seen[k];
-        k += 1;
-        for h in mesh.face_neighbors(g) {
-            if !seen.contains(&h) && same(h) {
-                seen.push(h);
+        let same = |h: FaceId| -> bool {
+            if mesh.face(h).material != mat {
+                return false;
+            }
+            let Some(ph) = mesh.face_plane(h) else {
+                return false;
+            };
+            ph.n.dot(plane.n) > 0.0
+                && mesh
+                    .face_points(h)
+                    .iter()
+                    .flatten()
+                    .all(|&p| plane.dist(p).abs() <= eps)
+        };
+        let mut stack = vec![f];
+        while let Some(x) = stack.pop() {
+            for h in mesh.face_neighbors(x) {
+                if group[h.idx()] == usize::MAX && same(h) {
+                    group[h.idx()] = g;
+                    total += mesh.face_area(h).abs();
+                    stack.push(h);
+                }
             }
         }
+        areas.push(total);
     }
-    seen.iter().map(|&g| mesh.face_area(g).abs()).sum()
+    (0..n)
+        .map(|i| areas.get(group[i]).copied().unwrap_or(0.0))
+        .collect()
 }
 
 /// Removes one face of every coincident pair of a flat model.
@@ -122,6 +137,7 @@ pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
     }
     let origin = origins(m);
     let mesh = Mesh::from_model(m.clone());
+    let surfaces = std::cell::OnceCell::new();
     let mut removed = vec![false; m.faces.len()];
     for (i, j) in pairs {
         let (a, b) = (faces[i], faces[j]);
@@ -133,7 +149,8 @@ pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
             (j, i, "same material: the later face goes".to_string())
         } else {
             let area = |_: usize, f: FaceId| {
-                origin[f.idx()].unwrap_or_else(|| surface_area(&mesh, f, eps))
+                origin[f.idx()]
+                    .unwrap_or_else(|| surfaces.get_or_init(|| surface_areas(&mesh, eps))[f.idx()])
             };
             let (sa, sb) = (area(i, a), area(j, b));
             if sa > sb {

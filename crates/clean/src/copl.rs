@@ -2,27 +2,31 @@
 //!
 //! Faces that are coplanar (within epsilon, either orientation) and partly
 //! overlap are cut in their plane so that every overlap region becomes a
-//! face of its own in each face it belongs to: a face overlapped by faces
-//! G₁…Gₖ is split by each in turn into its parts inside and outside
-//! (polygon booleans of the `geo` crate, holes and islands respected), so the
-//! pieces lying in the same set of faces are the same region in every face,
-//! and `ugclean` can then drop one of each coincident pair.
+//! face of its own in each face it belongs to. A face overlapped by faces
+//! G₁…Gₖ is divided by all their contours at once: its contours (tag 0) and
+//! theirs (tags 1…k) go into a snap-rounded arrangement ([`geom::arrange`]),
+//! and each face of the arrangement inside it is a piece, labelled with the
+//! set of Gᵢ that cover it (even-odd, decided topologically). The same
+//! region comes out as a piece of every face it belongs to, on the same
+//! vertices, so `ugclean` can drop one of each coincident pair.
 //!
 //! Piece corners within epsilon of an existing vertex reuse it; new corners
-//! are shared between all faces that need them. Each piece keeps its face's
-//! material and orientation, is named `NAME.c1`, `NAME.c2`, …, and is
-//! preceded by the origin annotation `{ugcopl origin NAME area A}` (A is the
-//! area of the original face's connected coplanar surface of its material),
-//! which `ugclean` reads to remove the piece of the larger surface. Finally
-//! the points where the cuts meet neighbouring faces' edges are inserted into
-//! those edges (the grouper's T-vertex step), so no T-vertex is left.
+//! (crossings of the faces' edges) are shared between all faces that find
+//! them. Each piece keeps its face's material and orientation, is named
+//! `NAME.c1`, `NAME.c2`, …, and is preceded by the origin annotation
+//! `{ugcopl origin NAME area A}` (A is the area of the original face's
+//! connected coplanar surface of its material), which `ugclean` reads to
+//! remove the piece of the larger surface. Finally vertices within epsilon
+//! are merged and the points where the cuts meet neighbouring faces' edges
+//! are inserted into those edges, so no T-vertex is left.
 
 use check::PairKind;
-use geom::DVec2;
-use geom::overlap::split_by;
+use geom::arrange::Tag;
+use rayon::prelude::*;
 use ug::{Item, Model};
+use winged::pieces::{Layout, Point};
 
-use crate::pieces::{Rebuild, face_geoms, perimeter, segments};
+use crate::pieces::{Rebuild, face_geoms};
 
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Stats {
@@ -53,8 +57,39 @@ pub fn copl(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
         others[i].push(j);
         others[j].push(i);
     }
-    // Built only when a face is cut (for the origin surface's area).
-    let mesh = std::cell::OnceCell::new();
+    let pos = |v: ug::VertexId| m.vertices[v.idx()].pos;
+    let work: Vec<usize> = (0..faces.len())
+        .filter(|&k| !others[k].is_empty())
+        .collect();
+    let results: Vec<(usize, Vec<Vec<Vec<Point>>>)> = work
+        .par_iter()
+        .filter_map(|&k| {
+            let g = geoms[k].as_ref()?;
+            let mut layout = Layout::new(g.frame);
+            layout.contours(&m.faces[faces[k].idx()].contours, Tag::Toggle(0), pos);
+            for (t, &j) in others[k].iter().enumerate() {
+                layout.contours(
+                    &m.faces[faces[j].idx()].contours,
+                    Tag::Toggle(t as u32 + 1),
+                    pos,
+                );
+            }
+            let arr = layout.arrange(eps, false);
+            let pieces: Vec<Vec<Vec<Point>>> = arr
+                .faces
+                .iter()
+                .filter(|f| f.has(0))
+                .map(|f| layout.loops(&arr, f))
+                .collect();
+            Some((k, pieces))
+        })
+        .collect();
+    let mut cut_of: Vec<Option<usize>> = vec![None; faces.len()];
+    for (r, (k, _)) in results.iter().enumerate() {
+        cut_of[*k] = Some(r);
+    }
+    // Found only when a face is cut (for the origin surfaces' areas).
+    let surfaces = std::cell::OnceCell::new();
     let mut order = vec![usize::MAX; m.faces.len()];
     for (k, &f) in faces.iter().enumerate() {
         order[f.idx()] = k;
@@ -67,51 +102,30 @@ pub fn copl(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
         };
         let k = order[f.idx()];
         let face = &m.faces[f.idx()];
-        let (Some(g), false) = (geoms[k].as_ref(), others[k].is_empty()) else {
+        let Some(r) = cut_of.get(k).copied().flatten() else {
             rb.face(face.clone());
             continue;
         };
-        let cutters: Vec<Vec<Vec<DVec2>>> = others[k]
-            .iter()
-            .filter_map(|&j| geoms[j].as_ref())
-            .map(|o| {
-                o.contours
-                    .iter()
-                    .map(|c| c.iter().map(|&p| g.frame.to_2d(p)).collect())
-                    .collect()
-            })
-            .collect();
-        let pieces = split_by(&g.contours_2d, &cutters, eps * perimeter(&g.contours_2d));
+        let pieces = &results[r].1;
+        let base = face.name.clone().unwrap_or_else(|| format!("f{}", k + 1));
         if pieces.len() <= 1 {
-            rb.face(face.clone());
+            // Overlapped only along its boundary within epsilon: the face
+            // keeps its shape (it may gain vertices).
+            if pieces.is_empty() {
+                rb.face(face.clone());
+            } else {
+                rb.pieces(face, &base, "c", pieces, None);
+            }
             continue;
         }
-        // Exact f64 positions for the points the booleans rounded: on the
-        // face's edges and the other faces' edges.
-        let features = segments(g.contours_2d.iter().chain(cutters.iter().flatten()));
-        let (lo, hi) =
-            geom::index::bbox(g.contours_2d.iter().flatten().map(|p| p.extend(0.0)), 0.0);
-        let tol = 1e-7 * (hi - lo).length().max(eps);
         stats.faces_cut += 1;
-        let base = face.name.clone().unwrap_or_else(|| format!("f{}", k + 1));
         let note = format!(
             "ugcopl origin {base} area {}",
-            crate::coincident::surface_area(
-                mesh.get_or_init(|| winged::Mesh::from_model(m.clone())),
-                *f,
-                eps
-            )
+            surfaces.get_or_init(|| {
+                crate::coincident::surface_areas(&winged::Mesh::from_model(m.clone()), eps)
+            })[f.idx()]
         );
-        stats.pieces += rb.pieces(
-            face,
-            &base,
-            "c",
-            pieces,
-            &g.frame,
-            &features,
-            tol,
-            Some(&note),
-        );
+        stats.pieces += rb.pieces(face, &base, "c", pieces, Some(&note));
     }
     stats.new_vertices = rb.new_vertices;
     // Where the cuts meet neighbouring edges: insert the points (no T-vertex).

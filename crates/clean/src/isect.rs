@@ -2,56 +2,92 @@
 //!
 //! Every pair of faces whose interiors intersect (`ugcheck`'s test: a common
 //! point inside one of them — crossing faces, or a wall standing on an uncut
-//! floor) is cut along the line where their planes meet: each face is split
-//! by that line, across its whole extent, into its parts on either side
-//! (polygon booleans, so holes and non-convex faces work; a line that crosses
-//! a non-convex face several times cuts it each time). A face whose boundary
-//! already runs along the line is left whole. The points where one face's cut
-//! meets the other face's boundary are then inserted into the edges they lie
-//! on (the grouper's T-vertex step, which also merges corners that the cuts
-//! of different faces computed within epsilon of each other), so that the
-//! line of intersection becomes edges shared by both faces and no T-vertex
-//! is left. Pieces keep their face's material and orientation and are named
-//! `NAME.i1`, `NAME.i2`, …
+//! floor) is cut along the **segments** where they actually meet: the part
+//! of the line where their planes meet that lies in both faces
+//! ([`geom::intersect::cut_segments`]). A cut stops where the other face
+//! stops; the floor under a box is cut along the box's footprint, not along
+//! four lines across the whole floor.
 //!
+//! Each face is then divided in its plane by all its cuts at once: its
+//! contours and the cut segments go into a snap-rounded arrangement
+//! ([`geom::arrange`], snap radius epsilon), whose faces inside the face are
+//! the pieces. So no piece is narrower than epsilon, no contour touches
+//! itself, and cut points that different pairs compute within epsilon of
+//! each other are one vertex. A cut that ends inside a face (a lone
+//! partition standing on a floor) is extended along its line only as far as
+//! the next edge, so that the pieces are valid faces. The segment's end
+//! points are computed once per pair and shared by both faces; crossings
+//! found in several faces snap to one vertex. Finally vertices within
+//! epsilon are merged and the points where cuts meet neighbouring edges are
+//! inserted into them (the grouper's first two steps), so the intersection
+//! becomes edges shared by both faces and no T-vertex is left.
+//!
+//! Pieces keep their face's material and orientation and are named
+//! `NAME.i1`, `NAME.i2`, … (a face that only gains vertices keeps its name).
 //! Coplanar pairs are left to `ugcopl`.
 
-use crate::pieces::{Rebuild, face_geoms, perimeter, segments};
-use check::PairKind;
-use geom::intersect::FaceGeom;
-use geom::overlap::split_by;
-use geom::{DVec2, DVec3};
-use ug::{Item, Model};
+use geom::arrange::Tag;
+use geom::intersect::cut_segments;
+use rayon::prelude::*;
+use ug::{Item, Model, VertexId};
+use winged::pieces::{Layout, Point};
+
+use crate::pieces::{Rebuild, face_geoms};
 
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Stats {
     pub pairs: usize,
+    /// Cut segments found (one pair may give several, through holes).
+    pub segments: usize,
     pub faces_cut: usize,
     pub pieces: usize,
     pub new_vertices: usize,
     pub tvertices: usize,
+    /// Cuts extended to make valid pieces.
+    pub extensions: usize,
+    /// Rounds of cutting (pairs looked for again after each).
+    pub rounds: usize,
+    /// Non-planar faces folded into triangles first.
+    pub tessellated: usize,
 }
 
-/// The line where two planes meet: a point and a unit direction.
-fn plane_line(a: &FaceGeom, b: &FaceGeom) -> Option<(DVec3, DVec3)> {
-    let (n1, n2) = (a.plane.n, b.plane.n);
-    let u = n1.cross(n2);
-    let uu = u.length_squared();
-    if uu < 1e-24 {
-        return None;
-    }
-    let p0 = (n2.cross(u) * a.plane.d + u.cross(n1) * b.plane.d) / uu;
-    Some((p0, u / uu.sqrt()))
-}
+/// Most rounds of cutting: a cut can leave a piece that meets another face
+/// within epsilon where the whole face did not (a corner a hair from a
+/// plane), so the pairs are looked for again until none is left.
+const MAX_ROUNDS: usize = 4;
 
-/// Cuts the intersecting faces of a flat model.
+/// Cuts the intersecting faces of a flat model. Faces that are not planar
+/// (within `eps`) are first folded into triangles as `ugplanar` does: a
+/// face is cut in its plane.
 pub fn isect(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
+    let (planar, pst) = crate::planar::planarize(m, eps);
+    let m = &planar;
+    let (mut out, mut stats) = isect_once(m, eps)?;
+    stats.tessellated = pst.nonplanar;
+    let mut rounds = 1;
+    while stats.pairs > 0 && rounds < MAX_ROUNDS {
+        let (next, st) = isect_once(&out, eps)?;
+        if st.pairs == 0 || (st.faces_cut == 0 && st.new_vertices == 0) {
+            break;
+        }
+        rounds += 1;
+        stats.segments += st.segments;
+        stats.faces_cut += st.faces_cut;
+        stats.new_vertices += st.new_vertices;
+        stats.tvertices += st.tvertices;
+        stats.extensions += st.extensions;
+        stats.pieces = stats.pieces + st.pieces;
+        stats.rounds = rounds;
+        out = next;
+    }
+    stats.rounds = rounds;
+    Ok((out, stats))
+}
+
+/// One round: every intersecting pair found and cut.
+fn isect_once(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
     let (faces, geoms) = face_geoms(m);
-    let pairs: Vec<(usize, usize)> = check::classify_pairs(&geoms, eps)
-        .into_iter()
-        .filter(|p| p.2 == PairKind::Intersect)
-        .map(|(i, j, _)| (i, j))
-        .collect();
+    let pairs: Vec<(usize, usize)> = check::intersecting_pairs(&geoms, eps);
     let mut stats = Stats {
         pairs: pairs.len(),
         ..Stats::default()
@@ -59,21 +95,65 @@ pub fn isect(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
     if pairs.is_empty() {
         return Ok((m.clone(), stats));
     }
-    let mut lines: Vec<Vec<(DVec3, DVec3)>> = vec![Vec::new(); faces.len()];
-    for &(i, j) in &pairs {
-        let (Some(a), Some(b)) = (geoms[i].as_ref(), geoms[j].as_ref()) else {
-            continue;
-        };
-        if let Some(l) = plane_line(a, b) {
-            lines[i].push(l);
-            lines[j].push(l);
+    // The cut segments of every pair (in parallel, collected in pair order).
+    let cuts: Vec<Vec<(geom::DVec3, geom::DVec3)>> = pairs
+        .par_iter()
+        .map(|&(i, j)| match (geoms[i].as_ref(), geoms[j].as_ref()) {
+            (Some(a), Some(b)) => cut_segments(a, b, eps),
+            _ => Vec::new(),
+        })
+        .collect();
+    // Their end points as vertices, once per pair, shared by both faces.
+    let mut rb = Rebuild::new(m, eps);
+    let mut by_face: Vec<Vec<(VertexId, VertexId)>> = vec![Vec::new(); faces.len()];
+    for (&(i, j), segs) in pairs.iter().zip(&cuts) {
+        let base = m.faces[faces[i].idx()]
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("f{}", i + 1));
+        for &(p, q) in segs {
+            let a = rb.vertex(p, &base, "i");
+            let b = rb.vertex(q, &base, "i");
+            if a != b {
+                stats.segments += 1;
+                by_face[i].push((a, b));
+                by_face[j].push((a, b));
+            }
         }
+    }
+    // Each cut face divided by its arrangement (in parallel).
+    let work: Vec<usize> = (0..faces.len())
+        .filter(|&k| !by_face[k].is_empty())
+        .collect();
+    let pos = |v: VertexId| rb.out.vertices[v.idx()].pos;
+    let results: Vec<(usize, Vec<Vec<Vec<Point>>>, usize)> = work
+        .par_iter()
+        .filter_map(|&k| {
+            let face = &m.faces[faces[k].idx()];
+            let g = geoms[k].as_ref()?;
+            let mut layout = Layout::new(g.frame);
+            layout.contours(&face.contours, Tag::Toggle(0), pos);
+            for &(a, b) in &by_face[k] {
+                layout.segment(a, pos(a), b, pos(b), Tag::Cut);
+            }
+            let arr = layout.arrange(eps, true);
+            let pieces: Vec<Vec<Vec<Point>>> = arr
+                .faces
+                .iter()
+                .filter(|f| f.has(0))
+                .map(|f| layout.loops(&arr, f))
+                .collect();
+            Some((k, pieces, arr.extensions))
+        })
+        .collect();
+    let mut cut_of: Vec<Option<usize>> = vec![None; faces.len()];
+    for (r, (k, _, _)) in results.iter().enumerate() {
+        cut_of[*k] = Some(r);
     }
     let mut order = vec![usize::MAX; m.faces.len()];
     for (k, &f) in faces.iter().enumerate() {
         order[f.idx()] = k;
     }
-    let mut rb = Rebuild::new(m, eps);
     for it in &m.items {
         let Item::Face(f) = it else {
             rb.pass(it);
@@ -81,61 +161,22 @@ pub fn isect(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
         };
         let k = order[f.idx()];
         let face = &m.faces[f.idx()];
-        let (Some(g), false) = (geoms[k].as_ref(), lines[k].is_empty()) else {
+        let Some(r) = cut_of.get(k).copied().flatten() else {
             rb.face(face.clone());
             continue;
         };
-        // Each cutting line as a half-plane polygon covering the face generously.
-        let (lo, hi) =
-            geom::index::bbox(g.contours_2d.iter().flatten().map(|p| p.extend(0.0)), 0.0);
-        let (lo, hi) = (lo.truncate(), hi.truncate());
-        let r = 4.0 * (hi - lo).length().max(eps);
-        let centre = (lo + hi) / 2.0;
-        let mut seen: Vec<(DVec2, DVec2)> = Vec::new();
-        let mut halves: Vec<Vec<Vec<DVec2>>> = Vec::new();
-        for &(p0, dir) in &lines[k] {
-            let (q, d) = (
-                g.frame.to_2d(p0),
-                DVec2::new(dir.dot(g.frame.u), dir.dot(g.frame.v)),
-            );
-            let dl = d.length();
-            if dl < 1e-12 {
-                continue;
-            }
-            let d = d / dl;
-            // Same line as one already used (within eps): skip.
-            if seen.iter().any(|(q2, d2)| {
-                d.perp_dot(*d2).abs() * r <= eps && (q - *q2).perp_dot(*d2).abs() <= eps
-            }) {
-                continue;
-            }
-            seen.push((q, d));
-            let n = d.perp();
-            // The foot of the centre on the line, then a square on the left of it.
-            let base = q + d * (centre - q).dot(d);
-            halves.push(vec![vec![
-                base - d * r,
-                base + d * r,
-                base + d * r + n * r,
-                base - d * r + n * r,
-            ]]);
-        }
-        let pieces = split_by(&g.contours_2d, &halves, eps * perimeter(&g.contours_2d));
-        if pieces.len() <= 1 {
+        let (_, pieces, ext) = &results[r];
+        stats.extensions += ext;
+        if pieces.is_empty() {
+            // Nothing with area (cannot happen for a sound face): keep it.
             rb.face(face.clone());
             continue;
         }
-        // Exact f64 positions for the points the booleans rounded: on the
-        // face's edges and the cutting lines.
-        let mut features = segments(&g.contours_2d);
-        features.extend(
-            seen.iter()
-                .map(|&(q, d)| (q - d * 2.0 * r, q + d * 2.0 * r)),
-        );
-        let tol = 1e-7 * (hi - lo).length().max(eps);
-        stats.faces_cut += 1;
+        if pieces.len() > 1 {
+            stats.faces_cut += 1;
+        }
         let base = face.name.clone().unwrap_or_else(|| format!("f{}", k + 1));
-        stats.pieces += rb.pieces(face, &base, "i", pieces, &g.frame, &features, tol, None);
+        stats.pieces += rb.pieces(face, &base, "i", pieces, None);
     }
     stats.new_vertices = rb.new_vertices;
     let opts = crate::group::Options {

@@ -80,6 +80,8 @@ pub struct Report {
     pub by_bombs: usize,
     pub by_name: usize,
     pub doubled: usize,
+    /// Duplicate faces flipped to face like the face they duplicate.
+    pub duplicates: usize,
     /// Components whose outside could not be decided (named by their first face).
     pub ambiguous: Vec<String>,
     /// Components that cannot be oriented consistently (Möbius-like), by first face.
@@ -94,6 +96,7 @@ impl Report {
             + self.toward_scene
             + self.by_bombs
             + self.by_name
+            + self.duplicates
     }
 }
 
@@ -117,12 +120,20 @@ fn labels(mesh: &Mesh) -> Vec<(FaceId, String)> {
         .collect()
 }
 
-/// A point well inside a face (centroid of its largest triangle), its unit normal and area.
+/// A point well inside a face (centroid of its largest triangle), points
+/// spread over the face for the visibility vote, its unit normal and area.
 struct Sample {
     p: DVec3,
+    /// Up to [`SPREAD`] points spread over the face by area (stratified): a
+    /// big floor is judged by what all its parts see, not by one point
+    /// that may lie under a wall standing on it.
+    spread: Vec<DVec3>,
     n: DVec3,
     area: f64,
 }
+
+/// Most points a face is sampled at for the vote.
+const SPREAD: usize = 8;
 
 fn sample(mesh: &Mesh, f: FaceId) -> Option<Sample> {
     let pts = mesh.face_points(f);
@@ -133,8 +144,36 @@ fn sample(mesh: &Mesh, f: FaceId) -> Option<Sample> {
         .iter()
         .max_by(|a, b| tri_area(&flat, a).total_cmp(&tri_area(&flat, b)))?;
     let p = (flat[best[0]] + flat[best[1]] + flat[best[2]]) / 3.0;
+    let areas: Vec<f64> = tris.iter().map(|t| tri_area(&flat, t)).collect();
+    let total: f64 = areas.iter().sum();
+    let mut spread = Vec::with_capacity(SPREAD);
+    if total > 0.0 {
+        let mut acc = 0.0;
+        let mut k = 0;
+        for j in 0..SPREAD {
+            let target = (j as f64 + 0.5) / SPREAD as f64 * total;
+            while k + 1 < tris.len() && acc + areas[k] < target {
+                acc += areas[k];
+                k += 1;
+            }
+            // A point inside triangle k (reflected into it when outside).
+            let (mut u, mut v) = (
+                (j as f64 + 0.5) / SPREAD as f64,
+                (j as u32).reverse_bits() as f64 / 4294967296.0 + 0.5 / SPREAD as f64,
+            );
+            v = v.fract();
+            if u + v > 1.0 {
+                (u, v) = (1.0 - u, 1.0 - v);
+            }
+            let t = tris[k];
+            spread.push(flat[t[0]] + (flat[t[1]] - flat[t[0]]) * u + (flat[t[2]] - flat[t[0]]) * v);
+        }
+    } else {
+        spread.push(p);
+    }
     Some(Sample {
         p,
+        spread,
         n,
         area: mesh.face_area(f).abs(),
     })
@@ -174,7 +213,14 @@ fn hemisphere(k: usize) -> Vec<DVec3> {
 }
 
 /// Orients the faces of a flat model.
+///
+/// Adjacency is decided on a welded copy (vertices within `eps` merged,
+/// T-vertices inserted), so the result does not depend on whether the
+/// grouper ran first; a face that duplicates an earlier one (the same
+/// vertices once welded) takes no part and is then oriented like it (so
+/// `ugclean` removes it as coincident).
 pub fn orient(model: Model, opts: &Options) -> Result<(Model, Report), UnknownFace> {
+    let welded = opts.auto.then(|| model.clone());
     let mut mesh = Mesh::from_model(model);
     let mut rep = Report::default();
     let names = labels(&mesh);
@@ -191,8 +237,43 @@ pub fn orient(model: Model, opts: &Options) -> Result<(Model, Report), UnknownFa
         .collect::<Result<_, _>>()?;
 
     let mut ambiguous_faces: Vec<FaceId> = Vec::new();
-    if opts.auto {
-        ambiguous_faces = automatic(&mut mesh, opts, &names, &mut rep);
+    if let Some(copy) = welded {
+        let mut work = Mesh::from_model(copy);
+        winged::weld::merge_vertices(&mut work, opts.eps);
+        winged::weld::split_edges(&mut work, opts.eps);
+        // Duplicates: the same set of vertices as an earlier face.
+        let mut first: rustc_hash::FxHashMap<Vec<ug::VertexId>, FaceId> = Default::default();
+        let mut ghosts: Vec<(FaceId, FaceId)> = Vec::new();
+        for f in work.faces().collect::<Vec<_>>() {
+            let mut key: Vec<ug::VertexId> =
+                work.face(f).contours.iter().flatten().copied().collect();
+            key.sort_unstable();
+            key.dedup();
+            match first.get(&key) {
+                Some(&o) => {
+                    ghosts.push((f, o));
+                    work.remove_face(f);
+                }
+                None => {
+                    first.insert(key, f);
+                }
+            }
+        }
+        let (ambiguous, flipped) = automatic(&mut work, opts, &names, &mut rep);
+        ambiguous_faces = ambiguous;
+        for f in flipped {
+            if mesh.is_face_live(f) {
+                mesh.flip_face(f);
+            }
+        }
+        for (g, o) in ghosts {
+            if let (Some(ng), Some(no)) = (mesh.face_normal(g), mesh.face_normal(o))
+                && ng.dot(no) < 0.0
+            {
+                mesh.flip_face(g);
+                rep.duplicates += 1;
+            }
+        }
     }
     if !opts.bombs.is_empty() {
         let bvh = scene(&mesh);
@@ -250,13 +331,14 @@ pub fn orient(model: Model, opts: &Options) -> Result<(Model, Report), UnknownFa
     Ok((mesh.into_model(), rep))
 }
 
-/// Automatic orientation; returns the faces of ambiguous components.
+/// Automatic orientation (on `mesh`, in place); returns the faces of
+/// ambiguous components and the faces flipped.
 fn automatic(
     mesh: &mut Mesh,
     opts: &Options,
     names: &[(FaceId, String)],
     rep: &mut Report,
-) -> Vec<FaceId> {
+) -> (Vec<FaceId>, Vec<FaceId>) {
     let faces: Vec<FaceId> = mesh.faces().collect();
     let nf = mesh.model().faces.len();
     let label = |f: FaceId| {
@@ -317,6 +399,31 @@ fn automatic(
         comps.push(members);
     }
     rep.components = comps.len();
+    // Objects: components that share any edge (a wall whose foot face is
+    // split off by edges it shares with an overlapping run is still one
+    // wall). Enclosure is judged per object, never by a piece of one.
+    let mut parent: Vec<usize> = (0..comps.len()).collect();
+    fn root(p: &mut [usize], mut x: usize) -> usize {
+        while p[x] != x {
+            p[x] = p[p[x]];
+            x = p[x];
+        }
+        x
+    }
+    for e in mesh.edges() {
+        let uses = &mesh.edge(e).uses;
+        let first = comp[uses[0].face.idx()];
+        for u in &uses[1..] {
+            let (a, b) = (
+                root(&mut parent, first),
+                root(&mut parent, comp[u.face.idx()]),
+            );
+            if a != b {
+                parent[a.max(b)] = a.min(b);
+            }
+        }
+    }
+    let object_of: Vec<usize> = (0..comps.len()).map(|c| root(&mut parent, c)).collect();
 
     // Geometry with the relative flips applied.
     let samples: Vec<Option<Sample>> = (0..nf)
@@ -339,10 +446,31 @@ fn automatic(
     let decisions: Vec<(i32, Reason)> = comps
         .par_iter()
         .enumerate()
-        .map(|(c, members)| decide(mesh, &bvh, &comp, &rel, &samples, c, members, &comps, opts))
+        .map(|(c, members)| {
+            decide(
+                mesh, &bvh, &comp, &rel, &samples, c, members, &comps, &object_of, opts,
+            )
+        })
         .collect();
+    if let Ok(dbg) = std::env::var("UGFLIP_DEBUG") {
+        for (c, members) in comps.iter().enumerate() {
+            let names: Vec<String> = members
+                .iter()
+                .map(|&f| mesh.face(f).name.clone().unwrap_or_default())
+                .collect();
+            if names.iter().any(|n| n.starts_with(&dbg)) {
+                eprintln!(
+                    "DEBUG comp {c}: {:?} rel {:?} -> {:?}",
+                    names,
+                    members.iter().map(|f| rel[f.idx()]).collect::<Vec<_>>(),
+                    decisions[c]
+                );
+            }
+        }
+    }
 
     let mut ambiguous = Vec::new();
+    let mut flipped = Vec::new();
     for (c, members) in comps.iter().enumerate() {
         let (d, reason) = decisions[c];
         if d == 0 {
@@ -356,6 +484,7 @@ fn automatic(
                 continue;
             }
             mesh.flip_face(f);
+            flipped.push(f);
             if !flip_all {
                 rep.consistency += 1;
             } else {
@@ -367,7 +496,8 @@ fn automatic(
             }
         }
     }
-    ambiguous
+    flipped.sort_unstable();
+    (ambiguous, flipped)
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -388,6 +518,7 @@ fn decide(
     c: usize,
     members: &[FaceId],
     comps: &[Vec<FaceId>],
+    object_of: &[usize],
     opts: &Options,
 ) -> (i32, Reason) {
     let total_area: f64 = members
@@ -418,7 +549,7 @@ fn decide(
         let (lo, hi) = bbox_of(mesh, members);
         let size = (hi - lo).length();
         if vol.abs() > opts.eps * total_area.max(size * size) {
-            let encloses = encloses(bvh, comp, samples, c, comps, opts, lo, hi);
+            let encloses = encloses(bvh, comp, samples, c, comps, object_of, opts, lo, hi);
             let outward = vol > 0.0;
             return if encloses {
                 (if outward { -1 } else { 1 }, Reason::Inward)
@@ -441,8 +572,8 @@ fn decide(
         let delta = opts.eps.max(1e-9 * (1.0 + s.p.length()));
         let w = s.area / dirs.len() as f64;
         for (k, side) in [1.0, -1.0].into_iter().enumerate() {
-            let o = s.p + s.n * (side * delta);
-            for d in &dirs {
+            for (i, d) in dirs.iter().enumerate() {
+                let o = s.spread[i % s.spread.len()] + s.n * (side * delta);
                 let dir = (frame.u * d.x + frame.v * d.y + frame.n * d.z) * side;
                 if let Some(h) = bvh.intersect(o, dir, 0.0, f64::INFINITY, |id| id != f.0) {
                     let seen = h.t * h.t * w;
@@ -490,35 +621,71 @@ fn encloses(
     samples: &[Option<Sample>],
     c: usize,
     comps: &[Vec<FaceId>],
+    object_of: &[usize],
     opts: &Options,
     lo: DVec3,
     hi: DVec3,
 ) -> bool {
-    let mut probes: Vec<DVec3> = Vec::new();
+    let d = (1e-4 * (hi - lo).length()).max(10.0 * opts.eps);
+    let dir = DVec3::new(0.302_775_637, 0.723_606_798, 0.620_349_731).normalize();
+    let in_box = |p: DVec3| p.cmpge(lo).all() && p.cmple(hi).all();
+    let inside = |p: DVec3| {
+        if !in_box(p) {
+            return false;
+        }
+        let mut ts: Vec<f64> = bvh
+            .all_hits(p, dir, 0.0, f64::INFINITY, |id| comp[id as usize] == c)
+            .into_iter()
+            .map(|h| h.t)
+            .collect();
+        ts.sort_by(f64::total_cmp);
+        ts.dedup_by(|a, b| (*a - *b).abs() <= 1e-9 * (1.0 + b.abs()));
+        ts.len() % 2 == 1
+    };
+    // Every other object within the box: enclosed when more than half of
+    // its area is inside (each face judged at the points just in front of
+    // and just behind it, so a sheet lying on this component's surface — a
+    // rug on a floor — is not inside, and neither is a box sunk a little
+    // into a slab, whose bottom alone is).
+    let mut by_object: rustc_hash::FxHashMap<usize, Vec<&Sample>> = Default::default();
     for (k, members) in comps.iter().enumerate() {
-        if k == c {
+        if object_of[k] == object_of[c] {
             continue;
         }
-        if let Some(s) = members.iter().find_map(|f| samples[f.idx()].as_ref()) {
-            probes.push(s.p);
+        for s in members.iter().filter_map(|f| samples[f.idx()].as_ref()) {
+            by_object.entry(object_of[k]).or_default().push(s);
         }
     }
-    probes.extend(opts.viewpoints.iter().copied());
-    probes.extend(opts.bombs.iter().copied());
-    let dir = DVec3::new(0.302_775_637, 0.723_606_798, 0.620_349_731).normalize();
-    probes
-        .into_iter()
-        .filter(|p| p.cmpge(lo).all() && p.cmple(hi).all())
-        .any(|p| {
-            let mut ts: Vec<f64> = bvh
-                .all_hits(p, dir, 0.0, f64::INFINITY, |id| comp[id as usize] == c)
-                .into_iter()
-                .map(|h| h.t)
-                .collect();
-            ts.sort_by(f64::total_cmp);
-            ts.dedup_by(|a, b| (*a - *b).abs() <= 1e-9 * (1.0 + b.abs()));
-            ts.len() % 2 == 1
-        })
+    let mut objects: Vec<usize> = by_object.keys().copied().collect();
+    objects.sort_unstable();
+    let mut probes: Vec<Vec<DVec3>> = Vec::new();
+    for o in objects {
+        let faces = &by_object[&o];
+        if !faces.iter().all(|s| in_box(s.p)) {
+            continue;
+        }
+        let total: f64 = faces.iter().map(|s| s.area).sum();
+        let within: f64 = faces
+            .iter()
+            .filter(|s| inside(s.p + s.n * d) && inside(s.p - s.n * d))
+            .map(|s| s.area)
+            .sum();
+        if total > 0.0 && within > 0.5 * total {
+            probes.push(vec![faces[0].p]);
+            break;
+        }
+    }
+    let mut extra: Vec<Vec<DVec3>> = opts.viewpoints.iter().map(|&p| vec![p]).collect();
+    extra.extend(opts.bombs.iter().map(|&p| vec![p]));
+    if !probes.is_empty() {
+        return true;
+    }
+    let probes = extra;
+    let r = probes.iter().position(|ps| ps.iter().all(|&p| inside(p)));
+    if std::env::var("UGFLIP_DEBUG").is_ok() && r.is_some() {
+        eprintln!("DEBUG comp {c} encloses probe {:?}", probes[r.unwrap()]);
+    }
+    r.is_some()
 }
 
 /// Eye points of `cam` statements written `cam NAME … -eye X Y Z …`.

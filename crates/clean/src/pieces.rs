@@ -1,35 +1,20 @@
-//! Rebuilding a model in which some faces are replaced by pieces computed in
-//! 2-D (shared by `ugcopl` and `ugisect`): piece corners are moved back onto
-//! the exact intersection of the features they lie on, snapped to existing
-//! vertices within epsilon (or to corners other pieces created), and written
-//! just before the first piece that uses them.
+//! Cutting faces into pieces in their planes and writing the model back
+//! (shared by `ugisect` and `ugcopl`).
+//!
+//! Each face to cut is laid out in its plane with what divides it (cut
+//! segments, or the contours of coplanar faces) and put through the
+//! snap-rounded arrangement of `geom::arrange` (in parallel: it depends only
+//! on positions). Its pieces come back as loops of points; [`Rebuild`] then
+//! writes the model in statement order, making new points into vertices
+//! (reusing any vertex within epsilon, so a crossing found in two faces is
+//! one vertex) just before the first piece that uses them.
 
-use geom::overlap::refine_point;
-use geom::{DVec2, DVec3, Frame};
+use geom::DVec3;
 use rustc_hash::{FxHashMap, FxHashSet};
 use ug::{Face, FaceId, Item, Model, Vertex, VertexId};
+use winged::pieces::{Point, to_contours};
 
 pub use check::face_geoms;
-
-/// Total length of a face's contours in 2-D.
-pub fn perimeter(contours: &[Vec<DVec2>]) -> f64 {
-    contours
-        .iter()
-        .map(|c| {
-            (0..c.len())
-                .map(|i| (c[(i + 1) % c.len()] - c[i]).length())
-                .sum::<f64>()
-        })
-        .sum()
-}
-
-/// The contour segments of polygons, for [`refine_point`].
-pub fn segments<'a>(polys: impl IntoIterator<Item = &'a Vec<DVec2>>) -> Vec<(DVec2, DVec2)> {
-    polys
-        .into_iter()
-        .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
-        .collect()
-}
 
 /// The output model under construction.
 pub struct Rebuild {
@@ -73,7 +58,7 @@ impl Rebuild {
     }
 
     /// The nearest vertex within epsilon (lowest id on ties).
-    fn find(&self, p: DVec3) -> Option<VertexId> {
+    pub fn find(&self, p: DVec3) -> Option<VertexId> {
         let (x, y, z) = self.key(p);
         let mut best: Option<(f64, VertexId)> = None;
         for dx in -1..=1 {
@@ -96,6 +81,31 @@ impl Rebuild {
         best.map(|b| b.1)
     }
 
+    /// The vertex within epsilon of `p`, or a new one named `BASE.TAGvK`.
+    pub fn vertex(&mut self, p: DVec3, base: &str, tag: &str) -> VertexId {
+        if let Some(v) = self.find(p) {
+            return v;
+        }
+        let mut k = self.new_vertices;
+        let name = loop {
+            k += 1;
+            let cand = format!("{base}.{tag}v{k}");
+            if self.vnames.insert(cand.clone()) {
+                break cand;
+            }
+        };
+        let id = VertexId(self.out.vertices.len() as u32);
+        self.out.vertices.push(Vertex {
+            name,
+            pos: p,
+            color: None,
+        });
+        let key = self.key(p);
+        self.grid.entry(key).or_default().push(id);
+        self.new_vertices += 1;
+        id
+    }
+
     /// Passes a statement through.
     pub fn pass(&mut self, it: &Item) {
         self.out.items.push(it.clone());
@@ -103,77 +113,45 @@ impl Rebuild {
 
     /// Writes a face.
     pub fn face(&mut self, face: Face) {
+        self.flush_vertices();
         let id = FaceId(self.out.faces.len() as u32);
         self.out.faces.push(face);
         self.out.items.push(Item::Face(id));
     }
 
-    /// Writes the pieces of `face` (2-D polygons in `frame`) as faces named
-    /// `BASE.TAGk`, each preceded by `annotation` when given. Points are moved
-    /// onto the exact intersection of the nearest `features` (within `tol`).
-    /// Returns how many pieces were written.
-    #[allow(clippy::too_many_arguments)]
+    fn flush_vertices(&mut self) {
+        for v in self.emitted..self.out.vertices.len() {
+            self.out.items.push(Item::Vertex(VertexId(v as u32)));
+        }
+        self.emitted = self.out.vertices.len();
+    }
+
+    /// Writes the pieces of `face` (loops of points) as faces, each
+    /// preceded by `annotation(k)` when given: one piece keeps the face's
+    /// name, several are named `BASE.TAGk`. Returns how many were written.
     pub fn pieces(
         &mut self,
         face: &Face,
         base: &str,
         tag: &str,
-        pieces: Vec<Vec<Vec<DVec2>>>,
-        frame: &Frame,
-        features: &[(DVec2, DVec2)],
-        tol: f64,
+        pieces: &[Vec<Vec<Point>>],
         annotation: Option<&str>,
     ) -> usize {
-        let mut nv = 0usize;
+        let mut contours: Vec<Vec<Vec<VertexId>>> = Vec::with_capacity(pieces.len());
+        for loops in pieces {
+            let c = to_contours(loops, |p| self.vertex(p, base, tag));
+            if !c.is_empty() {
+                contours.push(c);
+            }
+        }
+        let whole = contours.len() == 1;
         let mut piece_no = 0usize;
         let mut written = 0;
-        for piece in pieces {
-            let mut contours: Vec<Vec<VertexId>> = Vec::new();
-            for ring in piece {
-                let mut c: Vec<VertexId> = Vec::with_capacity(ring.len());
-                for p2 in ring {
-                    let p = frame.to_3d(refine_point(p2, features, tol));
-                    let v = match self.find(p) {
-                        Some(v) => v,
-                        None => {
-                            let name = loop {
-                                nv += 1;
-                                let cand = format!("{base}.{tag}v{nv}");
-                                if self.vnames.insert(cand.clone()) {
-                                    break cand;
-                                }
-                            };
-                            let id = VertexId(self.out.vertices.len() as u32);
-                            self.out.vertices.push(Vertex {
-                                name,
-                                pos: p,
-                                color: None,
-                            });
-                            let key = self.key(p);
-                            self.grid.entry(key).or_default().push(id);
-                            self.new_vertices += 1;
-                            id
-                        }
-                    };
-                    if c.last() != Some(&v) {
-                        c.push(v);
-                    }
+        for c in contours {
+            let name = face.name.as_ref().map(|n| {
+                if whole {
+                    return n.clone();
                 }
-                while c.len() > 1 && c.first() == c.last() {
-                    c.pop();
-                }
-                if c.len() >= 3 {
-                    contours.push(c);
-                }
-            }
-            if contours.is_empty() {
-                continue;
-            }
-            for v in self.emitted..self.out.vertices.len() {
-                self.out.items.push(Item::Vertex(VertexId(v as u32)));
-            }
-            self.emitted = self.out.vertices.len();
-            let name = face.name.as_ref().map(|_| {
                 loop {
                     piece_no += 1;
                     let cand = format!("{base}.{tag}{piece_no}");
@@ -182,12 +160,13 @@ impl Rebuild {
                     }
                 }
             });
+            self.flush_vertices();
             if let Some(a) = annotation {
                 self.out.items.push(Item::Comment(a.to_string()));
             }
             self.face(Face {
                 name,
-                contours,
+                contours: c,
                 material: face.material,
             });
             written += 1;

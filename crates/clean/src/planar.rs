@@ -12,9 +12,12 @@
 //!   triangulation (spade) of its contours projected on the best-fit plane:
 //!   no new vertices, and the most regular triangles those vertices allow.
 //!
-//! Triangles are named `NAME.1`, `NAME.2`, … after their face (unnamed faces
-//! give unnamed triangles). Planar faces and all other statements pass
-//! through unchanged.
+//! A face whose projection crosses or touches itself is first made sound by
+//! the snap-rounded arrangement of its contours on that plane (even-odd
+//! region; the crossings become vertices on the plane), then triangulated,
+//! with a warning. Triangles are named `NAME.1`, `NAME.2`, … after their face
+//! (unnamed faces give unnamed triangles). Planar faces and all other
+//! statements pass through unchanged.
 
 use geom::triangulate::fold_triangles;
 use geom::{DVec3, Plane, newell_normal};
@@ -27,8 +30,10 @@ pub struct Stats {
     pub faces: usize,
     pub nonplanar: usize,
     pub triangles: usize,
-    /// Non-planar faces that could not be triangulated (their projection
-    /// self-intersects); they pass through unchanged with a warning.
+    /// Non-planar faces whose projection crosses or touches itself: repaired
+    /// in the plane before they were triangulated.
+    pub repaired: Vec<String>,
+    /// Non-planar faces left with no area at all (dropped).
     pub failed: Vec<String>,
 }
 
@@ -85,16 +90,24 @@ pub fn planarize(m: &Model, eps: f64) -> (Model, Stats) {
         };
         let f = &m.faces[fid.idx()];
         stats.faces += 1;
+        let label = f
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("#{}", stats.faces));
         let tris = match deviation(m, f) {
             Some((dev, _)) if dev > eps => {
                 stats.nonplanar += 1;
-                let t = tessellate(m, f);
-                if t.is_none() {
-                    stats.failed.push(
-                        f.name
-                            .clone()
-                            .unwrap_or_else(|| format!("#{}", stats.faces)),
-                    );
+                let t = tessellate(m, f).or_else(|| {
+                    stats.repaired.push(label.clone());
+                    let base = f
+                        .name
+                        .clone()
+                        .unwrap_or_else(|| format!("f{}", stats.faces));
+                    repaired_triangles(&mut out, f, eps, &base)
+                });
+                if t.as_ref().is_none_or(|t| t.is_empty()) {
+                    stats.failed.push(label.clone());
+                    continue;
                 }
                 t
             }
@@ -130,6 +143,63 @@ pub fn planarize(m: &Model, eps: f64) -> (Model, Stats) {
         }
     }
     (out, stats)
+}
+
+/// Triangles of a face whose projection on its best-fit plane crosses or
+/// touches itself: the arrangement of its contours there (snapped at
+/// `eps`), each piece of its even-odd region triangulated; crossings become
+/// new vertices of `out` on the plane, named `BASE.xK`.
+fn repaired_triangles(
+    out: &mut Model,
+    f: &Face,
+    eps: f64,
+    base: &str,
+) -> Option<Vec<[VertexId; 3]>> {
+    use geom::arrange::Tag;
+    use winged::pieces::{Layout, Point};
+    let pts: Vec<Vec<DVec3>> = f
+        .contours
+        .iter()
+        .map(|c| c.iter().map(|&v| out.pos(v)).collect())
+        .collect();
+    let mut layout = Layout::new(Layout::frame_of(&pts)?);
+    layout.contours(&f.contours, Tag::Toggle(0), |v| out.pos(v));
+    let arr = layout.arrange(eps, false);
+    let mut made: rustc_hash::FxHashMap<u32, VertexId> = Default::default();
+    let mut tris = Vec::new();
+    for face in arr.faces.iter().filter(|a| a.has(0)) {
+        let loops2: Vec<Vec<geom::DVec2>> = face
+            .loops
+            .iter()
+            .map(|l| l.iter().map(|&k| arr.points[k as usize]).collect())
+            .collect();
+        let loops = layout.loops(&arr, face);
+        let flat_k: Vec<u32> = face.loops.iter().flatten().copied().collect();
+        let flat_p: Vec<Point> = loops.into_iter().flatten().collect();
+        let Some(t) = geom::triangulate::triangulate_polygon(&loops2) else {
+            continue;
+        };
+        let mut id = |i: usize| -> VertexId {
+            match flat_p[i] {
+                Point::Vertex(v) => v,
+                Point::New(p) => *made.entry(flat_k[i]).or_insert_with(|| {
+                    let name = (1..)
+                        .map(|k| format!("{base}.x{k}"))
+                        .find(|n| !out.vertices.iter().any(|v| &v.name == n))
+                        .unwrap_or_default();
+                    out.add_vertex(ug::Vertex {
+                        name,
+                        pos: p,
+                        color: None,
+                    })
+                }),
+            }
+        };
+        for tri in t {
+            tris.push([id(tri[0]), id(tri[1]), id(tri[2])]);
+        }
+    }
+    Some(tris)
 }
 
 fn push_face(out: &mut Model, f: Face) -> FaceId {

@@ -4,6 +4,7 @@
 //! segment crossings) go through the exact predicates of the `robust` crate
 //! (Shewchuk's adaptive arithmetic); constructions are plain f64.
 
+pub mod arrange;
 pub mod bvh;
 pub mod index;
 pub mod intersect;

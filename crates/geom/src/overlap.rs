@@ -1,141 +1,164 @@
-//! Area of overlap of two planar regions (polygons with holes and islands),
-//! through the polygon boolean operations of the `geo` crate.
+//! Areas of overlap of two planar regions (polygons with holes and islands,
+//! even-odd rule), from the snap-rounded arrangement of their contours
+//! ([`crate::arrange`]): the same decisions `ugcopl` cuts by, so the checker
+//! and the cutter never disagree about what overlaps.
 
-use geo::{Area, BooleanOps, Coord, LineString, MultiPolygon, Polygon};
 use glam::DVec2;
 
-/// The region of a face under the even-odd rule: the XOR of its contours.
-pub fn region(contours: &[Vec<DVec2>]) -> MultiPolygon<f64> {
-    let mut acc = MultiPolygon::<f64>::new(vec![]);
-    for c in contours {
-        if c.len() < 3 {
-            continue;
+use crate::arrange::{Options, Segment, Tag, arrange};
+
+/// The areas of two regions and of their common part.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coverage {
+    pub a: f64,
+    pub b: f64,
+    pub common: f64,
+    /// Area in `a` and not in `b`, and the other way round.
+    pub only_a: f64,
+    pub only_b: f64,
+}
+
+/// Areas of `a`, `b` and `a ∩ b` (contour lists, even-odd), with features
+/// closer than `snap` taken as one.
+pub fn coverage(a: &[Vec<DVec2>], b: &[Vec<DVec2>], snap: f64) -> Coverage {
+    let mut pts = Vec::new();
+    let mut segs = Vec::new();
+    for (tag, region) in [(0u32, a), (1u32, b)] {
+        for c in region {
+            if c.len() < 3 {
+                continue;
+            }
+            let base = pts.len() as u32;
+            pts.extend(c.iter().copied());
+            let n = c.len() as u32;
+            segs.extend((0..n).map(|i| Segment {
+                a: base + i,
+                b: base + (i + 1) % n,
+                tag: Tag::Toggle(tag),
+            }));
         }
-        let ring: Vec<Coord<f64>> = c.iter().map(|p| Coord { x: p.x, y: p.y }).collect();
-        let poly = MultiPolygon::new(vec![Polygon::new(LineString::new(ring), vec![])]);
-        acc = if acc.0.is_empty() {
-            poly
-        } else {
-            acc.xor(&poly)
-        };
     }
-    acc
+    let arr = arrange(&pts, &segs, &Options::new(snap));
+    let mut cov = Coverage {
+        a: 0.0,
+        b: 0.0,
+        common: 0.0,
+        only_a: 0.0,
+        only_b: 0.0,
+    };
+    for f in &arr.faces {
+        let (ia, ib) = (f.has(0), f.has(1));
+        if ia {
+            cov.a += f.area;
+        }
+        if ib {
+            cov.b += f.area;
+        }
+        match (ia, ib) {
+            (true, true) => cov.common += f.area,
+            (true, false) => cov.only_a += f.area,
+            (false, true) => cov.only_b += f.area,
+            _ => {}
+        }
+    }
+    cov
+}
+
+/// [`coverage`] of the parts of `a` and `b` near their common bounding
+/// box (grown by 4 `snap`): contours reaching beyond it are clipped to it
+/// first (Sutherland–Hodgman, even-odd area kept inside the box), so that a
+/// big floor against a rug costs what the rug costs. `common` is exact;
+/// when anything was clipped (`.1` is true) `a` and `b` are the areas inside
+/// the box, and the regions are certainly not the same.
+pub fn coverage_near(a: &[Vec<DVec2>], b: &[Vec<DVec2>], snap: f64) -> (Coverage, bool) {
+    let bounds = |r: &[Vec<DVec2>]| {
+        let mut lo = DVec2::splat(f64::INFINITY);
+        let mut hi = DVec2::splat(f64::NEG_INFINITY);
+        for p in r.iter().flatten() {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        (lo, hi)
+    };
+    let (alo, ahi) = bounds(a);
+    let (blo, bhi) = bounds(b);
+    let pad = DVec2::splat(4.0 * snap);
+    let (lo, hi) = (alo.max(blo) - pad, ahi.min(bhi) + pad);
+    let empty = Coverage {
+        a: 0.0,
+        b: 0.0,
+        common: 0.0,
+        only_a: 0.0,
+        only_b: 0.0,
+    };
+    if lo.x >= hi.x || lo.y >= hi.y {
+        return (empty, true);
+    }
+    let inside = |l: DVec2, h: DVec2| l.cmpge(lo).all() && h.cmple(hi).all();
+    let clip = |r: &[Vec<DVec2>]| -> Vec<Vec<DVec2>> {
+        r.iter()
+            .map(|c| clip_to_box(c, lo, hi))
+            .filter(|c| c.len() >= 3)
+            .collect()
+    };
+    let (ca, cb) = (inside(alo, ahi), inside(blo, bhi));
+    let a2: Vec<Vec<DVec2>> = if ca { a.to_vec() } else { clip(a) };
+    let b2: Vec<Vec<DVec2>> = if cb { b.to_vec() } else { clip(b) };
+    (coverage(&a2, &b2, snap), !(ca && cb))
+}
+
+/// A closed contour clipped to the box [lo, hi] (Sutherland–Hodgman).
+fn clip_to_box(c: &[DVec2], lo: DVec2, hi: DVec2) -> Vec<DVec2> {
+    let mut pts: Vec<DVec2> = c.to_vec();
+    // (axis, bound, keep values >= bound?)
+    for (axis, bound, keep_above) in [
+        (0, lo.x, true),
+        (0, hi.x, false),
+        (1, lo.y, true),
+        (1, hi.y, false),
+    ] {
+        if pts.is_empty() {
+            break;
+        }
+        let val = |p: DVec2| if axis == 0 { p.x } else { p.y };
+        let ins = |p: DVec2| {
+            if keep_above {
+                val(p) >= bound
+            } else {
+                val(p) <= bound
+            }
+        };
+        let mut out = Vec::with_capacity(pts.len() + 4);
+        for i in 0..pts.len() {
+            let (p, q) = (pts[i], pts[(i + 1) % pts.len()]);
+            let (pi, qi) = (ins(p), ins(q));
+            if pi {
+                out.push(p);
+            }
+            if pi != qi {
+                let t = (bound - val(p)) / (val(q) - val(p));
+                let mut x = p + (q - p) * t;
+                if axis == 0 {
+                    x.x = bound;
+                } else {
+                    x.y = bound;
+                }
+                out.push(x);
+            }
+        }
+        pts = out;
+    }
+    pts
 }
 
 /// Unsigned area of the intersection of two regions given as contour lists.
-pub fn overlap_area(a: &[Vec<DVec2>], b: &[Vec<DVec2>]) -> f64 {
-    let (ra, rb) = (region(a), region(b));
-    if ra.0.is_empty() || rb.0.is_empty() {
-        return 0.0;
-    }
-    ra.intersection(&rb).unsigned_area()
+pub fn overlap_area(a: &[Vec<DVec2>], b: &[Vec<DVec2>], snap: f64) -> f64 {
+    coverage(a, b, snap).common
 }
 
 /// Unsigned area of a region given as contours (even-odd rule).
-pub fn region_area(a: &[Vec<DVec2>]) -> f64 {
-    region(a).unsigned_area()
-}
-
-/// Cuts the region of `a` by each of `others` in turn: every piece is split
-/// into its part inside and its part outside the next region. Returns the
-/// pieces as polygons with holes (outer contour counter-clockwise, holes
-/// clockwise; islands are separate pieces), dropping slivers with area below
-/// `min_area`. Pieces that lie in the same set of `others` are the same region
-/// for every face cut this way, which is what makes a coplanar overlap a
-/// separate face in each face it belongs to.
-pub fn split_by(
-    a: &[Vec<DVec2>],
-    others: &[Vec<Vec<DVec2>>],
-    min_area: f64,
-) -> Vec<Vec<Vec<DVec2>>> {
-    let mut pieces = vec![region(a)];
-    for o in others {
-        let ro = region(o);
-        if ro.0.is_empty() {
-            continue;
-        }
-        let mut next = Vec::with_capacity(pieces.len() * 2);
-        for p in pieces {
-            for part in [p.intersection(&ro), p.difference(&ro)] {
-                if part.unsigned_area() > min_area {
-                    next.push(part);
-                }
-            }
-        }
-        pieces = next;
-    }
-    let ring = |ls: &LineString<f64>, ccw: bool| -> Vec<DVec2> {
-        let mut pts: Vec<DVec2> = ls.0.iter().map(|c| DVec2::new(c.x, c.y)).collect();
-        if pts.len() > 1 && pts.first() == pts.last() {
-            pts.pop();
-        }
-        let s: f64 = (0..pts.len())
-            .map(|i| pts[i].perp_dot(pts[(i + 1) % pts.len()]))
-            .sum();
-        if (s > 0.0) != ccw {
-            pts.reverse();
-        }
-        pts
-    };
-    let mut out = Vec::new();
-    for mp in pieces {
-        for poly in mp.0 {
-            if poly.unsigned_area() <= min_area {
-                continue;
-            }
-            let mut contours = vec![ring(poly.exterior(), true)];
-            contours.extend(poly.interiors().iter().map(|h| ring(h, false)));
-            out.push(contours);
-        }
-    }
-    out
-}
-
-/// Moves a point that polygon booleans computed (they round to a fixed-point
-/// grid internally, ~1e-9 of the extent) back onto the exact intersection of
-/// the features it was made from: among `segments`, those whose lines pass
-/// within `tol` of the point (and that reach it, within `tol`), the two that
-/// cross at the largest angle are intersected in f64; with one, the point is
-/// projected onto it; with none it stays.
-pub fn refine_point(p: DVec2, segments: &[(DVec2, DVec2)], tol: f64) -> DVec2 {
-    let mut near: Vec<(DVec2, DVec2)> = Vec::new();
-    for &(a, b) in segments {
-        let d = b - a;
-        let l2 = d.length_squared();
-        if l2 == 0.0 {
-            continue;
-        }
-        let t = (p - a).dot(d) / l2;
-        let l = l2.sqrt();
-        if t * l < -tol || (t - 1.0) * l > tol {
-            continue;
-        }
-        if (p - a).perp_dot(d).abs() / l <= tol {
-            near.push((a, d / l));
-        }
-    }
-    let mut best: Option<(f64, DVec2)> = None;
-    for i in 0..near.len() {
-        for j in i + 1..near.len() {
-            let (a, u) = near[i];
-            let (b, v) = near[j];
-            let s = u.perp_dot(v);
-            if s.abs() < 1e-9 {
-                continue;
-            }
-            let x = a + u * ((b - a).perp_dot(v) / s);
-            if (x - p).length() <= 2.0 * tol && best.is_none_or(|(bs, _)| s.abs() > bs) {
-                best = Some((s.abs(), x));
-            }
-        }
-    }
-    if let Some((_, x)) = best {
-        return x;
-    }
-    if let Some(&(a, u)) = near.first() {
-        return a + u * (p - a).dot(u);
-    }
-    p
+pub fn region_area(a: &[Vec<DVec2>], snap: f64) -> f64 {
+    coverage(a, &[], snap).a
 }
 
 #[cfg(test)]
@@ -153,29 +176,15 @@ mod tests {
 
     #[test]
     fn overlap_of_squares() {
-        assert!((overlap_area(&[sq(0., 0., 2.)], &[sq(1., 1., 2.)]) - 1.0).abs() < 1e-12);
-        assert_eq!(overlap_area(&[sq(0., 0., 1.)], &[sq(1., 0., 1.)]), 0.0);
+        assert!((overlap_area(&[sq(0., 0., 2.)], &[sq(1., 1., 2.)], 1e-12) - 1.0).abs() < 1e-12);
+        assert_eq!(
+            overlap_area(&[sq(0., 0., 1.)], &[sq(1., 0., 1.)], 1e-12),
+            0.0
+        );
         // Clockwise input is the same region.
         let mut cw = sq(1., 1., 2.);
         cw.reverse();
-        assert!((overlap_area(&[sq(0., 0., 2.)], &[cw]) - 1.0).abs() < 1e-12);
-    }
-
-    #[test]
-    fn split_by_makes_the_overlap_a_piece() {
-        let pieces = split_by(&[sq(0., 0., 2.)], &[vec![sq(1., 1., 2.)]], 1e-12);
-        assert_eq!(pieces.len(), 2);
-        let areas: Vec<f64> = pieces.iter().map(|p| region_area(p)).collect();
-        assert!(
-            (areas[0] - 1.0).abs() < 1e-12 && (areas[1] - 3.0).abs() < 1e-12,
-            "{areas:?}"
-        );
-        // A square cut by a smaller one inside it: a piece with a hole and the inner piece.
-        let pieces = split_by(&[sq(0., 0., 4.)], &[vec![sq(1., 1., 1.)]], 1e-12);
-        assert_eq!(pieces.len(), 2);
-        assert_eq!(pieces.iter().map(|p| p.len()).collect::<Vec<_>>(), [1, 2]);
-        assert!(crate::polygon::signed_area_2d(&pieces[1][0]) > 0.0);
-        assert!(crate::polygon::signed_area_2d(&pieces[1][1]) < 0.0);
+        assert!((overlap_area(&[sq(0., 0., 2.)], &[cw], 1e-12) - 1.0).abs() < 1e-12);
     }
 
     #[test]
@@ -183,9 +192,46 @@ mod tests {
         let mut hole = sq(2., 2., 6.);
         hole.reverse();
         let face = vec![sq(0., 0., 10.), hole, sq(4., 4., 2.)];
-        assert!((region_area(&face) - 68.0).abs() < 1e-9);
+        assert!((region_area(&face, 1e-12) - 68.0).abs() < 1e-9);
         // A square inside the hole but outside the island overlaps nothing.
-        assert!(overlap_area(&face, &[sq(2.5, 2.5, 1.0)]) < 1e-12);
-        assert!((overlap_area(&face, &[sq(4.5, 4.5, 1.0)]) - 1.0).abs() < 1e-12);
+        assert!(overlap_area(&face, &[sq(2.5, 2.5, 1.0)], 1e-12) < 1e-12);
+        assert!((overlap_area(&face, &[sq(4.5, 4.5, 1.0)], 1e-12) - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn clipping_to_the_common_box_keeps_the_common_area() {
+        let mut hole = sq(2., 2., 6.);
+        hole.reverse();
+        let big = vec![sq(0., 0., 100.), hole];
+        for (small, want) in [
+            (sq(1.5, 1.5, 1.0), 0.75),
+            (sq(3.0, 3.0, 1.0), 0.0),
+            (sq(50.0, 50.0, 2.0), 4.0),
+        ] {
+            let (c, clipped) = coverage_near(&big, &[small.clone()], 1e-9);
+            assert!(clipped);
+            assert!((c.common - want).abs() < 1e-9, "{c:?}");
+            assert!((c.common - coverage(&big, &[small], 1e-9).common).abs() < 1e-9);
+        }
+        let (c, clipped) = coverage_near(&[sq(0., 0., 1.)], &[sq(0., 0., 1.)], 1e-9);
+        assert!(!clipped && (c.common - 1.0).abs() < 1e-12 && c.only_a == 0.0);
+    }
+
+    #[test]
+    fn a_small_triangle_at_a_holes_corner() {
+        // The kind of pair the boolean library missed: a face with a hole
+        // whose corner is cut off, and the small triangle in that corner.
+        let outer = sq(0., 0., 4.);
+        let hole = vec![
+            DVec2::new(1., 1.),
+            DVec2::new(1., 2.),
+            DVec2::new(1.9, 2.),
+            DVec2::new(2., 1.9),
+            DVec2::new(2., 1.),
+        ];
+        let tri = vec![DVec2::new(2., 1.9), DVec2::new(2., 2.), DVec2::new(1.9, 2.)];
+        let c = coverage(&[outer, hole], &[tri], 1e-9);
+        assert!((c.common - 0.005).abs() < 1e-12, "{c:?}");
+        assert!((c.a - (16.0 - 1.0 + 0.005)).abs() < 1e-12);
     }
 }

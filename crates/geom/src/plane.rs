@@ -101,9 +101,13 @@ impl Frame {
         }
     }
 
+    /// The point in the frame's coordinates. Coordinates below 1e-40 in
+    /// magnitude (rounding residue of points at the origin) are exactly 0:
+    /// the triangulator refuses such tiny values, and they mean nothing.
     pub fn to_2d(&self, p: DVec3) -> DVec2 {
         let d = p - self.origin;
-        DVec2::new(d.dot(self.u), d.dot(self.v))
+        let flush = |x: f64| if x.abs() < 1e-40 { 0.0 } else { x };
+        DVec2::new(flush(d.dot(self.u)), flush(d.dot(self.v)))
     }
 
     pub fn to_3d(&self, p: DVec2) -> DVec3 {

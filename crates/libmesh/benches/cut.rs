@@ -27,15 +27,15 @@ fn bench(c: &mut Criterion) {
     let mut len = 1.0;
     let mut best = (usize::MAX, len);
     for _ in 0..4 {
-        let (_, trial) = libmesh::patch::cut(&m, opts(len, eps));
+        let (_, trial) = libmesh::patch::cut(&m, opts(len, eps)).expect("meshed");
         if trial.patches.abs_diff(100_000) < best.0 {
             best = (trial.patches.abs_diff(100_000), len);
         }
         len *= (trial.patches as f64 / 100_000.0).sqrt();
     }
     let len = best.1;
-    let (_, st) = libmesh::patch::cut(&m, opts(len, eps));
-    assert!(st.failed.is_empty());
+    let (_, st) = libmesh::patch::cut(&m, opts(len, eps)).expect("meshed");
+    assert!(st.plain.is_empty());
     eprintln!(
         "ugcut building: {} faces ({x} × {y} rooms), len {len:.4} → {} patches ({} quads, {} triangles, {} grid cells), edges {:.3}..{:.3}, worst angle {:.1}°",
         m.faces.len(),
@@ -55,7 +55,7 @@ fn bench(c: &mut Criterion) {
     .expect("parses")
     .model;
     let weps = cli::epsilon(None, &wall);
-    let (_, ws) = libmesh::patch::cut(&wall, opts(1.0, weps));
+    let (_, ws) = libmesh::patch::cut(&wall, opts(1.0, weps)).expect("meshed");
     assert_eq!(ws.grid_cells, 100_000);
     assert_eq!(ws.patches, 100_000);
     eprintln!("ugcut wall: 500 × 200, len 1 → {} patches", ws.patches);

@@ -1,8 +1,16 @@
 //! The patch mesher (Smith 1991, §3.1): every surface becomes triangles and
 //! convex quadrilaterals of about a given edge length, without T-vertices.
 //!
-//! For each face (a surface: run `ugvlmerge` first so that coplanar faces of
-//! one material are joined; otherwise each face is meshed on its own, still
+//! It meshes whatever it is given ([`prepare`]): vertices within epsilon are
+//! welded and T-vertices inserted (the grouper's first two steps), faces
+//! that are not planar are folded into triangles as `ugplanar` would, and
+//! every face's contours are made sound in its plane by a snap-rounded
+//! arrangement ([`winged::pieces::repair`]: collinear runs a ulp off the
+//! line, spikes, a hole touching the outer contour, contours meeting at a
+//! point; a contour that crosses itself is split at its crossings and keeps
+//! its even-odd region). Faces with no area left are dropped. Then, for each
+//! face (a surface: run `ugvlmerge` first so that coplanar faces of one
+//! material are joined; otherwise each face is meshed on its own, still
 //! without T-vertices):
 //!
 //! 1. every boundary edge is divided into the whole number of equal segments
@@ -29,12 +37,13 @@
 //! before the first patch that uses them.
 
 use geom::index::bbox;
-use geom::{BoxIndex, DVec2, DVec3, Frame};
+use geom::{BoxIndex, DVec2, DVec3, Frame, Plane};
 use rustc_hash::{FxHashMap, FxHashSet};
 use spade::{
     AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
 };
 use ug::{Face, FaceId, Item, Model, Vertex, VertexId};
+use winged::pieces::{Repair, Snapper, repair, replace};
 
 #[derive(Clone, Copy, Debug)]
 pub struct Options {
@@ -61,8 +70,183 @@ pub struct Stats {
     pub max_edge: f64,
     /// Smallest interior angle of any triangle, degrees.
     pub worst_angle: f64,
-    /// Faces that could not be meshed (self-crossing or degenerate): passed through unchanged.
-    pub failed: Vec<String>,
+    /// Vertices welded into an earlier one within epsilon.
+    pub welded: usize,
+    /// T-vertices inserted into edges.
+    pub tvertices: usize,
+    /// Non-planar faces folded into triangles first.
+    pub tessellated: Vec<String>,
+    /// Faces whose contours crossed or touched themselves, and into how many
+    /// sound pieces they were split.
+    pub repaired: Vec<(String, usize)>,
+    /// Faces left out, and why (no area).
+    pub dropped: Vec<(String, String)>,
+    /// Faces on the same vertices as an earlier face, given its patches
+    /// (mirrored when they face the other way).
+    pub twins: usize,
+    /// Faces meshed by the plain triangulation because the grid and the
+    /// refinement could not be fitted (triangles of poorer shape).
+    pub plain: Vec<String>,
+}
+
+/// The default patch length: 2% of the model's bounding-box diagonal.
+pub fn default_len(m: &Model) -> f64 {
+    0.02 * m.bounds().map_or(0.0, |(lo, hi)| (hi - lo).length())
+}
+
+/// Labels of faces as `ugcheck` gives them: the name, or `#k` for the k-th
+/// top-level face (from 1).
+fn labels(m: &Model) -> Vec<String> {
+    let mut l = vec![String::new(); m.faces.len()];
+    for (k, f) in m.top_faces().enumerate() {
+        l[f.idx()] = m.faces[f.idx()]
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("#{}", k + 1));
+    }
+    l
+}
+
+/// The frame a face is meshed in: its outer contour's Newell normal, u
+/// along its longest outer edge (so the grid is aligned with it). The
+/// preparation repairs each face in this same frame, so that every
+/// decision about its contours is made on the same coordinates.
+pub fn mesh_frame(pts: &[Vec<DVec3>]) -> Option<Frame> {
+    let n = geom::face_normal(pts)?;
+    let outer = &pts[0];
+    let (mut best, mut dir) = (0.0, DVec3::X);
+    for i in 0..outer.len() {
+        let d = outer[(i + 1) % outer.len()] - outer[i];
+        if d.length() > best {
+            best = d.length();
+            dir = d;
+        }
+    }
+    Some(Frame::with_u(outer[0], n, dir))
+}
+
+/// Makes any flat model meshable: welds vertices within `eps`, inserts
+/// T-vertices, folds non-planar faces into triangles, repairs every face's
+/// contours in its plane (see the module documentation) and drops faces
+/// without area, recording each in `stats`.
+pub fn prepare(m: &Model, eps: f64, stats: &mut Stats) -> Model {
+    let labels = labels(m);
+    let label = |f: FaceId| {
+        labels
+            .get(f.idx())
+            .cloned()
+            .unwrap_or_else(|| format!("#{}", f.0 + 1))
+    };
+    let mut mesh = winged::Mesh::from_model(m.clone());
+    for r in mesh.repairs() {
+        if let winged::Repair::DroppedFace { face } = r {
+            stats
+                .dropped
+                .push((label(*face), "fewer than 3 distinct vertices".into()));
+        }
+    }
+    let (welded, dropped) = winged::weld::merge_vertices(&mut mesh, eps);
+    stats.welded = welded;
+    stats
+        .dropped
+        .extend(dropped.into_iter().map(|(f, why)| (label(f), why)));
+    stats.tvertices = winged::weld::split_edges(&mut mesh, eps).inserted;
+    let mut snap = Snapper::new(&mesh, eps);
+    let faces: Vec<FaceId> = mesh.faces().collect();
+    for f in faces {
+        let name = mesh
+            .face(f)
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("f{}", f.0 + 1));
+        let mut work = vec![f];
+        // Not planar: the triangles ugplanar would make, each then repaired.
+        let pts = mesh.face_points(f);
+        let off = Plane::fit(&pts[0]).map_or(0.0, |pl| {
+            pts.iter()
+                .flatten()
+                .map(|&p| pl.dist(p).abs())
+                .fold(0.0, f64::max)
+        });
+        if off > eps
+            && let Some(tris) = geom::triangulate::fold_triangles(&pts)
+        {
+            let ids: Vec<VertexId> = mesh.face(f).contours.iter().flatten().copied().collect();
+            let pieces = tris
+                .iter()
+                .map(|t| vec![t.iter().map(|&i| ids[i]).collect()])
+                .collect();
+            stats.tessellated.push(label(f));
+            work = match replace(&mut mesh, f, pieces, &name, "t") {
+                Repair::Pieces(v) => v,
+                _ => Vec::new(),
+            };
+        }
+        // Each piece is repaired again in its own meshing frame until it is
+        // sound there (a few rounds at most: the frames differ only by a
+        // rotation, which matters only for contours within rounding of
+        // touching).
+        let mut pieces = 0;
+        let mut changed = false;
+        let mut work: Vec<(FaceId, usize)> = work.into_iter().map(|g| (g, 0)).collect();
+        while let Some((g, round)) = work.pop() {
+            match repair(&mut mesh, g, eps, &mut snap, &name, mesh_frame) {
+                Repair::Sound => pieces += 1,
+                Repair::Pieces(v) if round < 3 => {
+                    changed = true;
+                    work.extend(v.into_iter().rev().map(|h| (h, round + 1)));
+                }
+                Repair::Pieces(v) => {
+                    pieces += v.len();
+                    changed = true;
+                }
+                Repair::Removed => changed = true,
+            }
+        }
+        if pieces == 0 {
+            stats
+                .dropped
+                .push((label(f), "no area (its contours enclose nothing)".into()));
+        } else if changed {
+            stats.repaired.push((label(f), pieces));
+        }
+    }
+    // New vertices (crossings) may lie on other faces' edges: insert them,
+    // and repair the faces that changed, until nothing changes.
+    let mut created = 0;
+    for _ in 0..4 {
+        if snap.created == created {
+            break;
+        }
+        created = snap.created;
+        let before: FxHashMap<FaceId, usize> = mesh
+            .faces()
+            .map(|f| (f, mesh.face(f).contours.iter().map(Vec::len).sum()))
+            .collect();
+        stats.tvertices += winged::weld::split_edges(&mut mesh, eps).inserted;
+        let dirty: Vec<FaceId> = mesh
+            .faces()
+            .filter(|f| {
+                before.get(f).copied() != Some(mesh.face(*f).contours.iter().map(Vec::len).sum())
+            })
+            .collect();
+        for g in dirty {
+            let name = mesh
+                .face(g)
+                .name
+                .clone()
+                .unwrap_or_else(|| format!("f{}", g.0 + 1));
+            let mut work = vec![(g, 0)];
+            while let Some((h, round)) = work.pop() {
+                if let Repair::Pieces(v) = repair(&mut mesh, h, eps, &mut snap, &name, mesh_frame)
+                    && round < 3
+                {
+                    work.extend(v.into_iter().rev().map(|x| (x, round + 1)));
+                }
+            }
+        }
+    }
+    mesh.into_model()
 }
 
 /// The division points (interior, from the lower vertex id to the higher) of every edge.
@@ -137,8 +321,17 @@ pub fn segments(length: f64, len: f64) -> usize {
     ((length / len).round() as usize).max(1)
 }
 
-/// Cuts every top-level face of a flat model into patches.
-pub fn cut(m: &Model, opts: Options) -> (Model, Stats) {
+/// Cuts every top-level face of a flat model into patches (after
+/// [`prepare`]). Fails only if a face could not be triangulated at all,
+/// which the preparation is meant to make impossible.
+pub fn cut(m: &Model, opts: Options) -> Result<(Model, Stats), String> {
+    let mut stats = Stats {
+        min_edge: f64::INFINITY,
+        worst_angle: 180.0,
+        ..Stats::default()
+    };
+    let prepared = prepare(m, opts.eps, &mut stats);
+    let m = &prepared;
     let mut cx = Ctx {
         m,
         opts,
@@ -154,11 +347,6 @@ pub fn cut(m: &Model, opts: Options) -> (Model, Stats) {
             map: FxHashMap::default(),
         },
     };
-    let mut stats = Stats {
-        min_edge: f64::INFINITY,
-        worst_angle: 180.0,
-        ..Stats::default()
-    };
     let mut out = Model {
         materials: m.materials.clone(),
         wires: m.wires.clone(),
@@ -167,6 +355,8 @@ pub fn cut(m: &Model, opts: Options) -> (Model, Stats) {
         ..Model::default()
     };
     let mut emitted = m.vertices.len(); // vertices of cx.vertices already written
+    let mut twins: FxHashMap<Vec<VertexId>, (Option<DVec3>, Vec<Vec<Vec<VertexId>>>)> =
+        FxHashMap::default();
     let mut edge_sum = 0.0;
     let mut edge_count = 0usize;
     for it in &m.items {
@@ -178,10 +368,63 @@ pub fn cut(m: &Model, opts: Options) -> (Model, Stats) {
                     .name
                     .clone()
                     .unwrap_or_else(|| format!("#{}", stats.faces));
-                let patches = mesh_face(&mut cx, *f, &mut stats).unwrap_or_else(|| {
-                    stats.failed.push(label.clone());
-                    vec![face.contours.clone()]
-                });
+                // A face on the same vertices as an earlier one (the other
+                // side of a zero-thickness wall, a box standing exactly on
+                // a floor) gets the same patches, mirrored when it faces
+                // the other way: the two sides stay coincident patch by patch.
+                let mut key: Vec<VertexId> = face.contours.iter().flatten().copied().collect();
+                key.sort_unstable();
+                key.dedup();
+                let normal = geom::face_normal(
+                    &face
+                        .contours
+                        .iter()
+                        .map(|c| c.iter().map(|&v| cx.pos(v)).collect::<Vec<_>>())
+                        .collect::<Vec<_>>(),
+                );
+                let twin = twins.get(&key).and_then(
+                    |(n0, p0): &(Option<DVec3>, Vec<Vec<Vec<VertexId>>>)| {
+                        let same = match (n0, normal) {
+                            (Some(a), Some(b)) => a.dot(b) > 0.0,
+                            _ => return None,
+                        };
+                        Some(if same {
+                            p0.clone()
+                        } else {
+                            p0.iter()
+                                .map(|cs| {
+                                    cs.iter()
+                                        .map(|c| c.iter().rev().copied().collect())
+                                        .collect()
+                                })
+                                .collect()
+                        })
+                    },
+                );
+                let patches = match twin {
+                    Some(p) => {
+                        stats.twins += 1;
+                        p
+                    }
+                    None => {
+                        let p = match mesh_face(&mut cx, *f, &mut stats, true) {
+                            Some(p) => p,
+                            None => match mesh_face(&mut cx, *f, &mut stats, false) {
+                                Some(p) => {
+                                    stats.plain.push(label.clone());
+                                    p
+                                }
+                                None => {
+                                    return Err(format!(
+                                        "face {label} could not be triangulated (please report this model)"
+                                    ));
+                                }
+                            },
+                        };
+                        twins.entry(key).or_insert((normal, p.clone()));
+                        p
+                    }
+                };
                 // New vertices made for this face go just before its patches.
                 flush_vertices(&cx, &mut out, &mut emitted);
                 let mut k = 0;
@@ -238,7 +481,7 @@ pub fn cut(m: &Model, opts: Options) -> (Model, Stats) {
     if edge_count == 0 {
         stats.min_edge = 0.0;
     }
-    (out, stats)
+    Ok((out, stats))
 }
 
 /// Writes vertex statements for the vertices created since the last call.
@@ -259,8 +502,15 @@ fn min_angle(p: &[DVec3; 3]) -> f64 {
         .fold(180.0, f64::min)
 }
 
-/// Patches (as contour lists of one contour each) for one face, or `None` if it cannot be meshed.
-fn mesh_face(cx: &mut Ctx<'_>, f: FaceId, stats: &mut Stats) -> Option<Vec<Vec<Vec<VertexId>>>> {
+/// Patches (as contour lists of one contour each) for one face, or `None` if
+/// it cannot be meshed. `full`: the grid of rectangles and the refinement;
+/// otherwise the plain constrained triangulation of the divided boundary.
+fn mesh_face(
+    cx: &mut Ctx<'_>,
+    f: FaceId,
+    stats: &mut Stats,
+    full: bool,
+) -> Option<Vec<Vec<Vec<VertexId>>>> {
     let m = cx.m;
     let face = &m.faces[f.idx()];
     let pts: Vec<Vec<DVec3>> = face
@@ -269,17 +519,7 @@ fn mesh_face(cx: &mut Ctx<'_>, f: FaceId, stats: &mut Stats) -> Option<Vec<Vec<V
         .map(|c| c.iter().map(|&v| m.pos(v)).collect())
         .collect();
     let n = geom::face_normal(&pts)?;
-    let outer = &pts[0];
-    // Frame along the longest outer edge.
-    let (mut best, mut dir) = (0.0, DVec3::X);
-    for i in 0..outer.len() {
-        let d = outer[(i + 1) % outer.len()] - outer[i];
-        if d.length() > best {
-            best = d.length();
-            dir = d;
-        }
-    }
-    let frame = Frame::with_u(outer[0], n, dir);
+    let frame = mesh_frame(&pts)?;
     let len = cx.opts.len;
     let eps = cx.opts.eps;
 
@@ -330,7 +570,7 @@ fn mesh_face(cx: &mut Ctx<'_>, f: FaceId, stats: &mut Stats) -> Option<Vec<Vec<V
     };
     let mut accepted = vec![false; nx * ny];
     let margin = 0.25 * du.min(dv);
-    if nx * ny <= 50_000_000 {
+    if full && nx * ny <= 50_000_000 {
         for j in 0..ny {
             let y = lo.y + dv * (j as f64 + 0.5);
             // Crossings of the row's centre line (half-open rule).
@@ -482,9 +722,11 @@ fn mesh_face(cx: &mut Ctx<'_>, f: FaceId, stats: &mut Stats) -> Option<Vec<Vec<V
         .with_max_allowed_area(0.6 * len * len)
         .with_min_required_area(1e-4 * len * len)
         .with_max_additional_vertices(20 * before + 1000);
-    cdt.refine(params);
-    for k in before..cdt.num_vertices() {
-        let p = cdt.vertices().nth(k).map(|v| v.position())?;
+    if full {
+        cdt.refine(params);
+    }
+    let added: Vec<Point2<f64>> = cdt.vertices().skip(before).map(|v| v.position()).collect();
+    for p in added {
         let v = cx.new_vertex(
             format!("{fname}.v{next_inner}"),
             frame.to_3d(DVec2::new(p.x, p.y)),
@@ -546,6 +788,34 @@ fn mesh_face(cx: &mut Ctx<'_>, f: FaceId, stats: &mut Stats) -> Option<Vec<Vec<V
         }
         tris.push(vs.map(|v| ids[v.fix().index()]));
     }
+    // Slivers: a boundary vertex on a nearly straight run (within epsilon
+    // of the line through its neighbours) makes a triangle of no width with
+    // them; flipping its long side away fixes it.
+    let fixed: FxHashSet<(VertexId, VertexId)> = bcontours
+        .iter()
+        .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
+        .chain(outline.iter().copied())
+        .map(|(a, b)| (a.min(b), a.max(b)))
+        .collect();
+    let at = |v: VertexId| frame.to_2d(cx.pos(v));
+    let steiner = remove_slivers(&mut tris, &fixed, &at, eps);
+    if !steiner.is_empty() {
+        let ids: Vec<VertexId> = steiner
+            .iter()
+            .map(|&q| {
+                let v = cx.new_vertex(format!("{fname}.v{next_inner}"), frame.to_3d(q));
+                next_inner += 1;
+                v
+            })
+            .collect();
+        for t in tris.iter_mut() {
+            for v in t.iter_mut() {
+                if v.0 > u32::MAX - 1_000_000 && ((u32::MAX - v.0) as usize) < ids.len() {
+                    *v = ids[(u32::MAX - v.0) as usize];
+                }
+            }
+        }
+    }
     let mut patches: Vec<Vec<Vec<VertexId>>> =
         quads.into_iter().map(|q| vec![q.to_vec()]).collect();
     let joined = if cx.opts.quads {
@@ -555,6 +825,142 @@ fn mesh_face(cx: &mut Ctx<'_>, f: FaceId, stats: &mut Stats) -> Option<Vec<Vec<V
     };
     patches.extend(joined.into_iter().map(|c| vec![c]));
     Some(patches)
+}
+
+/// Removes slivers: triangles with a vertex within `eps` of the opposite
+/// side. The long side of a sliver is flipped away when it is not a fixed
+/// edge, the two triangles across it form a strictly convex quadrilateral
+/// and neither new triangle is a sliver; otherwise the quadrilateral gets a
+/// point inside it (the best of a few candidates, by the smallest height of
+/// the four triangles it makes), so that a short boundary edge nearly along
+/// a thin strip (two cuts a millimetre apart) still gets triangles of some
+/// width. Returns the new points, in order; their ids in `tris` are
+/// `VertexId(u32::MAX - k)` for the k-th.
+fn remove_slivers(
+    tris: &mut Vec<[VertexId; 3]>,
+    fixed: &FxHashSet<(VertexId, VertexId)>,
+    at: &dyn Fn(VertexId) -> DVec2,
+    eps: f64,
+) -> Vec<DVec2> {
+    use geom::orient2d;
+    let mut steiner: Vec<DVec2> = Vec::new();
+    let pos = |v: VertexId, st: &[DVec2]| {
+        if v.0 > u32::MAX - 1_000_000 && ((u32::MAX - v.0) as usize) < st.len() {
+            st[(u32::MAX - v.0) as usize]
+        } else {
+            at(v)
+        }
+    };
+    let key = |a: VertexId, b: VertexId| (a.min(b), a.max(b));
+    // Height over the longest side, and that side's position.
+    let shape = |p: [DVec2; 3]| -> (f64, usize) {
+        let (mut best, mut len) = (0, 0.0);
+        for i in 0..3 {
+            let l = (p[(i + 1) % 3] - p[i]).length();
+            if l > len {
+                (best, len) = (i, l);
+            }
+        }
+        let area2 = (p[1] - p[0]).perp_dot(p[2] - p[0]).abs();
+        (if len > 0.0 { area2 / len } else { 0.0 }, best)
+    };
+    let ccw = |p: [DVec2; 3]| orient2d(p[0], p[1], p[2]) > 0;
+    let mut by_edge: FxHashMap<(VertexId, VertexId), usize> = FxHashMap::default();
+    for (k, t) in tris.iter().enumerate() {
+        for i in 0..3 {
+            by_edge.insert((t[i], t[(i + 1) % 3]), k);
+        }
+    }
+    let mut work: Vec<usize> = (0..tris.len()).rev().collect();
+    let mut budget = 8 * tris.len() + 16;
+    while let Some(k) = work.pop() {
+        if budget == 0 {
+            break;
+        }
+        let t = tris[k];
+        let p = t.map(|v| pos(v, &steiner));
+        let (h, i) = shape(p);
+        if h > eps {
+            continue;
+        }
+        let (a, b, m) = (t[i], t[(i + 1) % 3], t[(i + 2) % 3]);
+        if fixed.contains(&key(a, b)) {
+            continue;
+        }
+        let Some(&o) = by_edge.get(&(b, a)) else {
+            continue;
+        };
+        let ot = tris[o];
+        let Some(x) = ot.iter().copied().find(|&v| v != a && v != b) else {
+            continue;
+        };
+        let (pa, pb, pm, px) = (
+            pos(a, &steiner),
+            pos(b, &steiner),
+            pos(m, &steiner),
+            pos(x, &steiner),
+        );
+        budget -= 1;
+        // Quad a → x → b → m (counter-clockwise).
+        let convex = orient2d(pm, px, pa) < 0 && orient2d(pm, px, pb) > 0;
+        let flipped = [[m, a, x], [m, x, b]];
+        let flip_ok = convex
+            && flipped.iter().all(|nt| {
+                let q = nt.map(|v| pos(v, &steiner));
+                ccw(q) && shape(q).0 > eps
+            });
+        let replace: Vec<[VertexId; 3]> = if flip_ok {
+            flipped.to_vec()
+        } else {
+            // A point inside the quad: the best candidate.
+            let quad = [pa, px, pb, pm];
+            let mut best: Option<(f64, DVec2)> = None;
+            for wa in [1.0, 2.0, 4.0] {
+                for wx in [1.0, 2.0, 4.0] {
+                    for wb in [1.0, 4.0, 16.0] {
+                        for wm in [1.0, 4.0, 16.0] {
+                            let q = (pa * wa + px * wx + pb * wb + pm * wm) / (wa + wx + wb + wm);
+                            let hmin = (0..4)
+                                .map(|j| {
+                                    let tri = [quad[j], quad[(j + 1) % 4], q];
+                                    if ccw(tri) { shape(tri).0 } else { -1.0 }
+                                })
+                                .fold(f64::INFINITY, f64::min);
+                            if best.is_none_or(|(bh, _)| hmin > bh) {
+                                best = Some((hmin, q));
+                            }
+                        }
+                    }
+                }
+            }
+            match best {
+                Some((hmin, q)) if hmin > eps => {
+                    let id = VertexId(u32::MAX - steiner.len() as u32);
+                    steiner.push(q);
+                    vec![[a, x, id], [x, b, id], [b, m, id], [m, a, id]]
+                }
+                _ => continue,
+            }
+        };
+        for tt in [t, ot] {
+            for j in 0..3 {
+                by_edge.remove(&(tt[j], tt[(j + 1) % 3]));
+            }
+        }
+        let mut slots = vec![k, o];
+        while slots.len() < replace.len() {
+            tris.push(replace[0]);
+            slots.push(tris.len() - 1);
+        }
+        for (&slot, nt) in slots.iter().zip(&replace) {
+            tris[slot] = *nt;
+            for j in 0..3 {
+                by_edge.insert((nt[j], nt[(j + 1) % 3]), slot);
+            }
+            work.push(slot);
+        }
+    }
+    steiner
 }
 
 /// Whether the grid cell [a, b] can be a patch: it lies inside the face (its

@@ -75,7 +75,8 @@ fn cornell(len: f64) -> (ug::Model, libmesh::Mesh) {
             angle: 25.0,
             quads: true,
         },
-    );
+    )
+    .expect("meshed");
     let mesh = libmesh::Mesh::from_model(&m, eps).expect("patches");
     (m, mesh)
 }

@@ -1290,7 +1290,7 @@ mod tests {
             angle: 25.0,
             quads: true,
         };
-        let model = libmesh::patch::cut(&model, opts).0;
+        let model = libmesh::patch::cut(&model, opts).unwrap().0;
         let mesh = Mesh::from_model(&model, 1e-9).unwrap();
         let vis = RayVisibility::new(&mesh);
         let solver = Solver::new(mesh, &model.materials, &vis, Options::default());

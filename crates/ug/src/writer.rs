@@ -162,8 +162,54 @@ impl Writer<'_, '_> {
         }
     }
 
+    /// Writes a statement list. Every vertex is written before the first
+    /// face or wire that names it, so that one-pass readers can stream the
+    /// output: a vertex statement that comes later in the list is moved up
+    /// to just before that face (and not written again in its own place).
     fn items(&mut self, items: &[Item], depth: usize) {
-        for it in items {
+        const NOWHERE: u32 = u32::MAX;
+        // Position of each vertex's statement in this list.
+        let mut at: Vec<u32> = Vec::new();
+        for (k, it) in items.iter().enumerate() {
+            if let Item::Vertex(v) = it {
+                if at.is_empty() {
+                    at = vec![NOWHERE; self.m.vertices.len()];
+                }
+                if let Some(slot) = at.get_mut(v.idx())
+                    && *slot == NOWHERE
+                {
+                    *slot = k as u32;
+                }
+            }
+        }
+        let mut early: Vec<bool> = Vec::new();
+        for (k, it) in items.iter().enumerate() {
+            let names: &[Vec<VertexId>] = match it {
+                Item::Face(f) => &self.m.faces[f.idx()].contours,
+                Item::Wire(w) => &self.m.wires[w.idx()].polylines,
+                Item::Vertex(v) => {
+                    if early.get(v.idx()).copied().unwrap_or(false) {
+                        continue;
+                    }
+                    &[]
+                }
+                _ => &[],
+            };
+            for &v in names.iter().flatten() {
+                if at
+                    .get(v.idx())
+                    .is_some_and(|&p| p != NOWHERE && p as usize > k)
+                    && !early.get(v.idx()).copied().unwrap_or(false)
+                {
+                    if early.is_empty() {
+                        early = vec![false; self.m.vertices.len()];
+                    }
+                    early[v.idx()] = true;
+                    self.indent(depth);
+                    self.item(&Item::Vertex(v), depth);
+                    self.out.push(b'\n');
+                }
+            }
             self.indent(depth);
             self.item(it, depth);
             self.out.push(b'\n');

@@ -173,3 +173,20 @@ fn a_model_built_in_code_is_written_and_read_back() {
         "c_rgb red 1 0 0;\nv v0 0 0 0 red;\nv v1 1 0 0;\nv v2 0 1 0;\nf t (v0 v1 v2) red;\n"
     );
 }
+
+#[test]
+fn vertices_are_written_before_the_first_face_that_names_them() {
+    // The parser accepts forward references; the writer never emits them,
+    // so one-pass readers can stream its output.
+    let src = b"c_rgb m 1 1 1;\nf t (a b c) m;\nv a 0 0 0;\nw e (c d);\nv b 1 0 0;\nv c 0 1 0;\nv d 5 5 5;\nf u (a b d);\n";
+    let m = ug::parse(src, "<t>").unwrap().model;
+    let text = ug::write_string(&m);
+    assert_eq!(
+        text,
+        "c_rgb m 1 1 1;\nv a 0 0 0;\nv b 1 0 0;\nv c 0 1 0;\nf t (a b c) m;\nv d 5 5 5;\nw e (c d);\nf u (a b d);\n"
+    );
+    // Idempotent, and the same model.
+    let back = ug::parse(text.as_bytes(), "<t>").unwrap().model;
+    assert_eq!(ug::write_string(&back), text);
+    assert_eq!(back.faces.len(), 2);
+}

@@ -42,8 +42,10 @@
 mod merge;
 mod mesh;
 mod order;
+pub mod pieces;
 pub mod trace;
 mod validate;
+pub mod weld;
 
 #[cfg(test)]
 mod tests;

@@ -9,5 +9,5 @@ pub fn patches(src: &str, len: f64) -> ug::Model {
         angle: 25.0,
         quads: true,
     };
-    libmesh::patch::cut(&m, opts).0
+    libmesh::patch::cut(&m, opts).expect("meshed").0
 }

@@ -1,0 +1,793 @@
+//! A second generator: buildings drawn the way CAD programs export them
+//! (issue #13), with the dirt the `generate` grid does not have.
+//!
+//! Everything is a solid or a sheet lying on one, as a draftsman models it,
+//! not a clean boundary:
+//!
+//! * **storeys** of rooms on a grid of random column widths and row depths
+//!   (3–5.5 m), 3 m apart; each storey stands on a **slab** (a closed box,
+//!   0.2 m thick; its top is the floor, its underside the ceiling of the
+//!   storey below; the last one is the roof);
+//! * **walls are box slabs** (0.15 m inside, 0.25 m outside) from just
+//!   below the floor (sunk 0–3 cm into the slab, or standing exactly on it)
+//!   to just above the ceiling, one per room side, **split into 1–3 short
+//!   runs that overlap collinearly** (2–30 cm), every run reaching past the
+//!   junction so that walls **interpenetrate at every junction**;
+//! * **openings**: a door (0.9 × 2.1 m) in some inner walls, a window
+//!   (1.2 m wide, sill 0.9, lintel 2.1) in some outer walls; there the wall
+//!   is several convex boxes — piers, a lintel, a sill — whose faces are the
+//!   reveals, and a window has a **glass** quad in the wall's mid-plane whose
+//!   edges lie on the reveals;
+//! * **floors of running-bond tiles** in some rooms: rows of 1.2 × 0.6 m
+//!   tiles offset by half a tile (a T-vertex at every joint), clipped to the
+//!   room, lying on the slab;
+//! * **furniture**: desks (a top and four legs that pierce it and sink into
+//!   the floor), cabinets **pushed into a wall**, and boxes **rotated by an
+//!   arbitrary angle**; **papers** on desks, **rugs** on floors (on the
+//!   tiles too: three coplanar layers), **pictures** on walls — small faces
+//!   lying on larger ones of another material;
+//! * **columns** (0.3 m square, floor to ceiling) with one top corner
+//!   displaced 2 cm, so two sides are not planar;
+//! * **vaulted ceilings** in some rooms: a barrel of twisted (non-planar)
+//!   quads under the slab, springing from the side walls;
+//! * **lights**: a panel flush with the ceiling (coplanar with it, facing
+//!   down) or a **hanging light box** (its underside emits);
+//! * and over everything: faces **flipped** at random, **duplicate faces**
+//!   (sharing the vertex records, or on fresh copies of them), and **vertex
+//!   jitter** of about `jitter` × the model's size, so that coincident
+//!   vertices are only nearly so.
+//!
+//! Faces are named after their object (`s0w3r1.4`: storey 0, wall 3, run 1,
+//! box face 4); vertices likewise. The same arguments always give the same
+//! model.
+
+use glam::{DVec2, DVec3};
+use ug::{Defmat, Face, Material, MaterialDef, MaterialId, Model, Vertex, VertexId};
+
+use crate::Rng;
+
+/// Storey height (floor to floor).
+pub const STOREY: f64 = 3.0;
+/// Slab thickness.
+pub const SLAB: f64 = 0.2;
+/// Inner and outer wall thickness.
+pub const WALL_IN: f64 = 0.15;
+pub const WALL_OUT: f64 = 0.25;
+/// Emitted exitance of panels and light boxes (per channel, before the tint).
+pub const EMISSION: f64 = 10.0;
+
+/// What [`cad`] draws and how much dirt it adds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cad {
+    pub storeys: usize,
+    pub rooms_x: usize,
+    pub rooms_y: usize,
+    /// Fraction of faces written reversed.
+    pub flipped: f64,
+    /// Fraction of faces written twice (half on the same vertex records,
+    /// half on fresh copies).
+    pub duplicates: f64,
+    /// Vertex jitter, relative to the model's size (each coordinate moved
+    /// by up to this much).
+    pub jitter: f64,
+    /// Fraction of rooms with running-bond tile floors.
+    pub tiles: f64,
+    /// Fraction of outer wall segments with a window.
+    pub windows: f64,
+    /// Fraction of inner wall segments with a door.
+    pub doors: f64,
+    /// Fraction of rooms with a vaulted ceiling.
+    pub vaults: f64,
+    /// Fraction of rooms with a column.
+    pub columns: f64,
+    /// Pieces of furniture per room (0 to 4).
+    pub furniture: usize,
+    /// Rugs, papers and pictures.
+    pub extras: bool,
+    /// Fraction of rooms lit by a flush ceiling panel (the others by a
+    /// hanging light box).
+    pub panels: f64,
+}
+
+impl Default for Cad {
+    /// Two storeys of 2 × 2 rooms with every kind of dirt.
+    fn default() -> Self {
+        Cad {
+            storeys: 2,
+            rooms_x: 2,
+            rooms_y: 2,
+            flipped: 0.3,
+            duplicates: 0.03,
+            jitter: 1e-7,
+            tiles: 0.3,
+            windows: 0.6,
+            doors: 0.5,
+            vaults: 0.25,
+            columns: 0.3,
+            furniture: 2,
+            extras: true,
+            panels: 0.5,
+        }
+    }
+}
+
+impl Cad {
+    /// The default dirt with the room grid chosen so that the model has
+    /// about `faces` faces (`storeys` storeys; rooms as square as possible).
+    pub fn for_faces(faces: usize, storeys: usize, seed: u64) -> Cad {
+        let storeys = storeys.max(1);
+        let mut c = Cad {
+            storeys,
+            rooms_x: 1,
+            rooms_y: 1,
+            ..Cad::default()
+        };
+        // Faces grow with rooms; measure a small model and scale.
+        let probe = Cad {
+            rooms_x: 4,
+            rooms_y: 4,
+            ..c.clone()
+        };
+        let per_room = cad(&probe, seed).faces.len() as f64 / (16 * storeys) as f64;
+        let rooms = (faces as f64 / per_room / storeys as f64).max(1.0);
+        let x = rooms.sqrt().round().max(1.0) as usize;
+        let y = (rooms / x as f64).round().max(1.0) as usize;
+        c.rooms_x = x;
+        c.rooms_y = y;
+        c
+    }
+}
+
+/// Random streams, one per kind of thing, so that changing one fraction
+/// leaves the others' places unchanged.
+mod stream {
+    pub const GRID: u64 = 101;
+    pub const WALLS: u64 = 102;
+    pub const ROOMS: u64 = 103;
+    pub const FURNITURE: u64 = 104;
+    pub const DUPLICATES: u64 = 105;
+    pub const FLIPPED: u64 = 106;
+    pub const JITTER: u64 = 107;
+}
+
+struct B {
+    m: Model,
+    mats: Mats,
+}
+
+struct Mats {
+    floor: MaterialId,
+    ceiling: MaterialId,
+    roof: MaterialId,
+    slab: MaterialId,
+    wall: MaterialId,
+    facade: MaterialId,
+    glass: MaterialId,
+    tile: MaterialId,
+    wood: MaterialId,
+    metal: MaterialId,
+    rug: MaterialId,
+    paper: MaterialId,
+    picture: MaterialId,
+    column: MaterialId,
+    vault: MaterialId,
+    panel: MaterialId,
+    light: MaterialId,
+    lamp: MaterialId,
+}
+
+impl B {
+    fn v(&mut self, name: String, p: DVec3) -> VertexId {
+        self.m.add_vertex(Vertex {
+            name,
+            pos: p,
+            color: None,
+        })
+    }
+
+    fn f(&mut self, name: String, c: Vec<VertexId>, mat: MaterialId) {
+        self.m.add_face(Face {
+            name: Some(name),
+            contours: vec![c],
+            material: Some(mat),
+        });
+    }
+
+    /// A quad on four points (counter-clockwise seen from its front).
+    fn quad(&mut self, name: &str, p: [DVec3; 4], mat: MaterialId) {
+        let ids: Vec<VertexId> = (0..4)
+            .map(|k| self.v(format!("{name}.{k}"), p[k]))
+            .collect();
+        self.f(name.to_string(), ids, mat);
+    }
+
+    /// A closed box facing outward on eight corners (bit 0: +x side, bit 1:
+    /// +y, bit 2: +z, in the box's own frame), with a material per face:
+    /// bottom, top, and the four sides (−y, +x, +y, −x).
+    fn solid(&mut self, name: &str, c: [DVec3; 8], mats: [MaterialId; 6]) {
+        let ids: Vec<VertexId> = (0..8)
+            .map(|k| self.v(format!("{name}.v{k}"), c[k]))
+            .collect();
+        // Corner index from (x, y, z) bits.
+        let q = |x: usize, y: usize, z: usize| ids[x | (y << 1) | (z << 2)];
+        let faces = [
+            [q(0, 0, 0), q(0, 1, 0), q(1, 1, 0), q(1, 0, 0)], // bottom, −z
+            [q(0, 0, 1), q(1, 0, 1), q(1, 1, 1), q(0, 1, 1)], // top, +z
+            [q(0, 0, 0), q(1, 0, 0), q(1, 0, 1), q(0, 0, 1)], // −y
+            [q(1, 0, 0), q(1, 1, 0), q(1, 1, 1), q(1, 0, 1)], // +x
+            [q(1, 1, 0), q(0, 1, 0), q(0, 1, 1), q(1, 1, 1)], // +y
+            [q(0, 1, 0), q(0, 0, 0), q(0, 0, 1), q(0, 1, 1)], // −x
+        ];
+        for (k, f) in faces.iter().enumerate() {
+            self.f(format!("{name}.{k}"), f.to_vec(), mats[k]);
+        }
+    }
+
+    /// An axis-aligned box.
+    fn aabb(&mut self, name: &str, lo: DVec3, hi: DVec3, mats: [MaterialId; 6]) {
+        let c = std::array::from_fn(|k| {
+            DVec3::new(
+                if k & 1 == 0 { lo.x } else { hi.x },
+                if k & 2 == 0 { lo.y } else { hi.y },
+                if k & 4 == 0 { lo.z } else { hi.z },
+            )
+        });
+        self.solid(name, c, mats);
+    }
+
+    /// A box of footprint `size` centred at `centre` (x, y), rotated by
+    /// `angle` about z, from `z0` to `z1`.
+    #[allow(clippy::too_many_arguments)]
+    fn rotated(
+        &mut self,
+        name: &str,
+        centre: DVec2,
+        size: DVec2,
+        angle: f64,
+        z0: f64,
+        z1: f64,
+        mats: [MaterialId; 6],
+    ) {
+        let (s, c) = angle.sin_cos();
+        let corner = |k: usize| {
+            let lx = if k & 1 == 0 { -0.5 } else { 0.5 } * size.x;
+            let ly = if k & 2 == 0 { -0.5 } else { 0.5 } * size.y;
+            let p = centre + DVec2::new(c * lx - s * ly, s * lx + c * ly);
+            DVec3::new(p.x, p.y, if k & 4 == 0 { z0 } else { z1 })
+        };
+        self.solid(name, std::array::from_fn(corner), mats);
+    }
+}
+
+fn rgb(m: &mut Model, name: &str, c: [f64; 3]) -> MaterialId {
+    m.add_material(Material {
+        name: name.into(),
+        def: MaterialDef::Rgb(c),
+    })
+}
+
+fn emitter(m: &mut Model, name: &str, e: [f64; 3]) -> MaterialId {
+    m.add_material(Material {
+        name: name.into(),
+        def: MaterialDef::Defmat(Defmat {
+            diffuse: Some([0.8, 0.8, 0.8]),
+            emission: Some(e),
+            other: Vec::new(),
+        }),
+    })
+}
+
+fn pick(r: &mut Rng, fraction: f64) -> bool {
+    r.unit() < fraction.clamp(0.0, 1.0)
+}
+
+/// One room: its storey, grid place and clear rectangle.
+#[derive(Clone, Copy)]
+struct Room {
+    s: usize,
+    i: usize,
+    j: usize,
+    /// Inner faces of the surrounding walls (the room's clear rectangle).
+    ilo: DVec2,
+    ihi: DVec2,
+}
+
+/// Generates a CAD-like building (see the module documentation).
+pub fn cad(cfg: &Cad, seed: u64) -> Model {
+    let (nx, ny, ns) = (cfg.rooms_x.max(1), cfg.rooms_y.max(1), cfg.storeys.max(1));
+    let mut m = Model::new();
+    let mats = Mats {
+        floor: rgb(&mut m, "floor", [0.55, 0.5, 0.45]),
+        ceiling: rgb(&mut m, "ceiling", [0.85, 0.85, 0.85]),
+        roof: rgb(&mut m, "roof", [0.3, 0.3, 0.3]),
+        slab: rgb(&mut m, "slab", [0.5, 0.5, 0.5]),
+        wall: rgb(&mut m, "wall", [0.8, 0.78, 0.75]),
+        facade: rgb(&mut m, "facade", [0.6, 0.55, 0.5]),
+        glass: rgb(&mut m, "glass", [0.08, 0.1, 0.1]),
+        tile: rgb(&mut m, "tile", [0.7, 0.68, 0.6]),
+        wood: rgb(&mut m, "wood", [0.5, 0.35, 0.2]),
+        metal: rgb(&mut m, "metal", [0.4, 0.4, 0.42]),
+        rug: rgb(&mut m, "rug", [0.6, 0.15, 0.1]),
+        paper: rgb(&mut m, "paper", [0.9, 0.9, 0.88]),
+        picture: rgb(&mut m, "picture", [0.3, 0.4, 0.6]),
+        column: rgb(&mut m, "column", [0.7, 0.7, 0.7]),
+        vault: rgb(&mut m, "vault", [0.88, 0.86, 0.82]),
+        panel: emitter(&mut m, "panel", [EMISSION, EMISSION, 0.9 * EMISSION]),
+        light: emitter(&mut m, "light", [EMISSION, 0.9 * EMISSION, 0.7 * EMISSION]),
+        lamp: rgb(&mut m, "lamp", [0.6, 0.6, 0.6]),
+    };
+    let mut b = B { m, mats };
+
+    // The grid of wall axes, shared by every storey.
+    let mut rg = Rng::new(seed, stream::GRID);
+    let mut xs = vec![0.0];
+    for _ in 0..nx {
+        let last = *xs.last().unwrap_or(&0.0);
+        xs.push(last + rg.range(3.0, 5.5));
+    }
+    let mut ys = vec![0.0];
+    for _ in 0..ny {
+        let last = *ys.last().unwrap_or(&0.0);
+        ys.push(last + rg.range(3.0, 5.5));
+    }
+    let half_out = WALL_OUT / 2.0;
+    let thick = |outer: bool| if outer { WALL_OUT } else { WALL_IN };
+
+    // Slabs: storey s stands on slab s; slab ns is the roof.
+    let (x0, x1) = (xs[0] - half_out, xs[nx] + half_out);
+    let (y0, y1) = (ys[0] - half_out, ys[ny] + half_out);
+    for s in 0..=ns {
+        let top = s as f64 * STOREY;
+        let mt = b.mats.slab;
+        let up = if s == ns { b.mats.roof } else { b.mats.floor };
+        let down = if s == 0 { mt } else { b.mats.ceiling };
+        b.aabb(
+            &format!("slab{s}"),
+            DVec3::new(x0, y0, top - SLAB),
+            DVec3::new(x1, y1, top),
+            [down, up, mt, mt, mt, mt],
+        );
+    }
+
+    // Walls, storey by storey: along y at every x axis, then along x.
+    let mut rw = Rng::new(seed, stream::WALLS);
+    let mut wall_no = 0usize;
+    for s in 0..ns {
+        let zf = s as f64 * STOREY;
+        let zc = (s + 1) as f64 * STOREY - SLAB;
+        // (axis position, from, to, along x?, the outside's side: -1, +1 or 0 inside)
+        let mut segs: Vec<(f64, f64, f64, bool, i32)> = Vec::new();
+        let side = |k: usize, n: usize| {
+            if k == 0 {
+                -1
+            } else if k == n {
+                1
+            } else {
+                0
+            }
+        };
+        for (i, &x) in xs.iter().enumerate() {
+            for j in 0..ny {
+                segs.push((x, ys[j], ys[j + 1], false, side(i, nx)));
+            }
+        }
+        for (j, &y) in ys.iter().enumerate() {
+            for i in 0..nx {
+                segs.push((y, xs[i], xs[i + 1], true, side(j, ny)));
+            }
+        }
+        for &(c, a, e, along_x, out_side) in &segs {
+            let outer = out_side != 0;
+            let t = thick(outer);
+            let name = format!("s{s}w{wall_no}");
+            wall_no += 1;
+            let sink = if pick(&mut rw, 0.3) {
+                0.0
+            } else {
+                rw.range(0.005, 0.03)
+            };
+            let pen = rw.range(0.0, 0.03);
+            let (z0, z1) = (zf - sink, zc + pen);
+            // Past the junctions: half the crossing wall and a little more.
+            let a0 = a - t / 2.0 - rw.range(0.0, 0.05);
+            let e1 = e + t / 2.0 + rw.range(0.0, 0.05);
+            let face_mat = if outer { b.mats.facade } else { b.mats.wall };
+            let inner_mat = b.mats.wall;
+            // Box from along-axis [p, q] and height [za, zb], in world coordinates.
+            let wall_box = |b: &mut B, n: &str, p: f64, q: f64, za: f64, zb: f64| {
+                let (lo, hi) = if along_x {
+                    (
+                        DVec3::new(p, c - t / 2.0, za),
+                        DVec3::new(q, c + t / 2.0, zb),
+                    )
+                } else {
+                    (
+                        DVec3::new(c - t / 2.0, p, za),
+                        DVec3::new(c + t / 2.0, q, zb),
+                    )
+                };
+                // Sides facing −y/+y (along x) or −x/+x (along y); the
+                // outside of an outer wall is the facade.
+                let (sm, sp) = match out_side {
+                    -1 => (face_mat, inner_mat),
+                    1 => (inner_mat, face_mat),
+                    _ => (inner_mat, inner_mat),
+                };
+                let m = if along_x {
+                    [inner_mat, inner_mat, sm, inner_mat, sp, inner_mat]
+                } else {
+                    [inner_mat, inner_mat, inner_mat, sp, inner_mat, sm]
+                };
+                b.aabb(n, lo, hi, m);
+            };
+            let len = e - a;
+            let opening = if outer {
+                pick(&mut rw, cfg.windows)
+            } else {
+                pick(&mut rw, cfg.doors)
+            };
+            if opening && len >= 2.2 {
+                let (w, sill, head) = if outer {
+                    (1.2, Some(0.9), 2.1)
+                } else {
+                    (0.9, None, 2.1)
+                };
+                let o0 = a + rw.range(0.5, len - w - 0.5);
+                let o1 = o0 + w;
+                wall_box(&mut b, &format!("{name}p0"), a0, o0, z0, z1);
+                wall_box(&mut b, &format!("{name}p1"), o1, e1, z0, z1);
+                wall_box(&mut b, &format!("{name}l"), o0, o1, zf + head, z1);
+                if let Some(h) = sill {
+                    wall_box(&mut b, &format!("{name}s"), o0, o1, z0, zf + h);
+                    // Glass in the mid-plane, its edges on the reveals.
+                    let (za, zb) = (zf + h, zf + head);
+                    let p = |u: f64, z: f64| {
+                        if along_x {
+                            DVec3::new(u, c, z)
+                        } else {
+                            DVec3::new(c, u, z)
+                        }
+                    };
+                    let g = [p(o0, za), p(o1, za), p(o1, zb), p(o0, zb)];
+                    let g = if along_x { g } else { [g[1], g[0], g[3], g[2]] };
+                    b.quad(&format!("{name}g"), g, b.mats.glass);
+                }
+            } else {
+                // 1–3 runs overlapping collinearly.
+                let runs = 1 + rw.below(3);
+                let mut cuts = vec![a0];
+                for k in 1..runs {
+                    cuts.push(a + len * (k as f64 / runs as f64) + rw.range(-0.2, 0.2) * len / 3.0);
+                }
+                cuts.push(e1);
+                for k in 0..runs {
+                    let p = cuts[k] - if k > 0 { rw.range(0.02, 0.3) } else { 0.0 };
+                    let q = cuts[k + 1];
+                    wall_box(&mut b, &format!("{name}r{k}"), p, q, z0, z1);
+                }
+            }
+        }
+    }
+
+    // Rooms.
+    let mut rooms = Vec::new();
+    for s in 0..ns {
+        for i in 0..nx {
+            for j in 0..ny {
+                let tl = |k: usize, n: usize| thick(k == 0 || k == n) / 2.0;
+                rooms.push(Room {
+                    s,
+                    i,
+                    j,
+                    ilo: DVec2::new(xs[i] + tl(i, nx), ys[j] + tl(j, ny)),
+                    ihi: DVec2::new(xs[i + 1] - tl(i + 1, nx), ys[j + 1] - tl(j + 1, ny)),
+                });
+            }
+        }
+    }
+    let mut rr = Rng::new(seed, stream::ROOMS);
+    let mut rf = Rng::new(seed, stream::FURNITURE);
+    for room in &rooms {
+        room_contents(&mut b, cfg, room, &mut rr, &mut rf);
+    }
+
+    // Duplicates, flips, jitter.
+    let faces = b.m.faces.len();
+    let mut rd = Rng::new(seed, stream::DUPLICATES);
+    let mut copies = 0usize;
+    for f in 0..faces {
+        if !pick(&mut rd, cfg.duplicates) {
+            continue;
+        }
+        let face = b.m.faces[f].clone();
+        let fresh = rd.unit() < 0.5;
+        let contours = if fresh {
+            face.contours
+                .iter()
+                .map(|c| {
+                    c.iter()
+                        .map(|&v| {
+                            let old = b.m.vertices[v.idx()].clone();
+                            copies += 1;
+                            b.v(format!("{}.d{copies}", old.name), old.pos)
+                        })
+                        .collect()
+                })
+                .collect()
+        } else {
+            face.contours.clone()
+        };
+        b.m.add_face(Face {
+            name: face.name.as_ref().map(|n| format!("{n}.dup")),
+            contours,
+            material: face.material,
+        });
+    }
+    let mut rfl = Rng::new(seed, stream::FLIPPED);
+    for face in &mut b.m.faces {
+        if pick(&mut rfl, cfg.flipped) {
+            for c in &mut face.contours {
+                c.reverse();
+            }
+        }
+    }
+    let size = b.m.bounds().map_or(1.0, |(lo, hi)| (hi - lo).length());
+    let j = cfg.jitter * size;
+    if j > 0.0 {
+        let mut rj = Rng::new(seed, stream::JITTER);
+        for v in &mut b.m.vertices {
+            v.pos += DVec3::new(rj.range(-j, j), rj.range(-j, j), rj.range(-j, j));
+        }
+    }
+    b.m
+}
+
+fn room_contents(b: &mut B, cfg: &Cad, room: &Room, rr: &mut Rng, rf: &mut Rng) {
+    let s = room.s;
+    let zf = s as f64 * STOREY;
+    let zc = (s + 1) as f64 * STOREY - SLAB;
+    let name = format!("s{s}r{}_{}", room.i, room.j);
+    let (ilo, ihi) = (room.ilo, room.ihi);
+    let size = ihi - ilo;
+
+    // Running-bond tiles on the slab.
+    if pick(rr, cfg.tiles) {
+        let (tw, td) = (1.2, 0.6);
+        let rows = (size.y / td).ceil() as usize;
+        let mut k = 0;
+        for r in 0..rows {
+            let ya = ilo.y + r as f64 * td;
+            let yb = (ya + td).min(ihi.y);
+            let shift = if r % 2 == 1 { tw / 2.0 } else { 0.0 };
+            let mut x = ilo.x - shift;
+            while x < ihi.x - 1e-9 {
+                let xa = x.max(ilo.x);
+                let xb = (x + tw).min(ihi.x);
+                if xb - xa > 0.05 && yb - ya > 0.05 {
+                    b.quad(
+                        &format!("{name}t{k}"),
+                        [
+                            DVec3::new(xa, ya, zf),
+                            DVec3::new(xb, ya, zf),
+                            DVec3::new(xb, yb, zf),
+                            DVec3::new(xa, yb, zf),
+                        ],
+                        b.mats.tile,
+                    );
+                    k += 1;
+                }
+                x += tw;
+            }
+        }
+    }
+
+    // A column with one top corner displaced.
+    let mut column: Option<DVec2> = None;
+    if pick(rr, cfg.columns) && size.x > 2.0 && size.y > 2.0 {
+        let c = DVec2::new(
+            rr.range(ilo.x + 0.8, ihi.x - 0.8),
+            rr.range(ilo.y + 0.8, ihi.y - 0.8),
+        );
+        column = Some(c);
+        let h = 0.15;
+        let (z0, z1) = (zf - rr.range(0.0, 0.02), zc + rr.range(0.0, 0.02));
+        let mut corners: [DVec3; 8] = std::array::from_fn(|k| {
+            DVec3::new(
+                c.x + if k & 1 == 0 { -h } else { h },
+                c.y + if k & 2 == 0 { -h } else { h },
+                if k & 4 == 0 { z0 } else { z1 },
+            )
+        });
+        corners[7] += DVec3::new(0.02, 0.01, 0.0);
+        b.solid(&format!("{name}c"), corners, [b.mats.column; 6]);
+    }
+
+    // Vault or flat ceiling; the light.
+    let vault = pick(rr, cfg.vaults) && size.x > 1.5 && size.y > 1.5;
+    let mut light_top = zc;
+    if vault {
+        let (spring, crown) = (zc - 0.8, zc - 0.05);
+        let nu = 6usize;
+        let nv = ((size.y / 1.2).round() as usize).max(2);
+        let mut ids = vec![VertexId(0); (nu + 1) * (nv + 1)];
+        for u in 0..=nu {
+            for v in 0..=nv {
+                let a = u as f64 / nu as f64;
+                let t = v as f64 / nv as f64;
+                let mut p = DVec3::new(
+                    ilo.x + size.x * a,
+                    ilo.y + size.y * t,
+                    spring + (crown - spring) * (std::f64::consts::PI * a).sin(),
+                );
+                // A twist: inner vertices move along the barrel, so the
+                // quads are not planar.
+                if u > 0 && u < nu && v > 0 && v < nv {
+                    p.y += 0.03 * (a - 0.5) * if v % 2 == 0 { 1.0 } else { -1.0 };
+                    p.z += 0.02 * ((u + v) % 2) as f64;
+                }
+                ids[u * (nv + 1) + v] = b.v(format!("{name}vv{u}_{v}"), p);
+            }
+        }
+        let mut k = 0;
+        for u in 0..nu {
+            for v in 0..nv {
+                let q = |du: usize, dv: usize| ids[(u + du) * (nv + 1) + v + dv];
+                // Facing down into the room.
+                b.f(
+                    format!("{name}v{k}"),
+                    vec![q(0, 0), q(0, 1), q(1, 1), q(1, 0)],
+                    b.mats.vault,
+                );
+                k += 1;
+            }
+        }
+        light_top = crown - 0.3;
+    }
+    let centre = (ilo + ihi) / 2.0;
+    let lc = match column {
+        // Keep the light off the column.
+        Some(c) if (c - centre).length() < 1.0 => centre + (centre - c).normalize_or_zero() * 1.0,
+        _ => centre,
+    };
+    if !vault && pick(rr, cfg.panels) {
+        // Flush with the ceiling, facing down.
+        let (hx, hy) = (0.6, 0.3);
+        b.quad(
+            &format!("{name}panel"),
+            [
+                DVec3::new(lc.x - hx, lc.y - hy, zc),
+                DVec3::new(lc.x - hx, lc.y + hy, zc),
+                DVec3::new(lc.x + hx, lc.y + hy, zc),
+                DVec3::new(lc.x + hx, lc.y - hy, zc),
+            ],
+            b.mats.panel,
+        );
+    } else {
+        let lamp = b.mats.lamp;
+        let drop = rr.range(0.3, 0.6);
+        b.aabb(
+            &format!("{name}lamp"),
+            DVec3::new(lc.x - 0.3, lc.y - 0.3, light_top - drop - 0.1),
+            DVec3::new(lc.x + 0.3, lc.y + 0.3, light_top - drop),
+            [b.mats.light, lamp, lamp, lamp, lamp, lamp],
+        );
+    }
+
+    // Rug (sometimes on the tiles), picture.
+    if cfg.extras {
+        if size.x > 2.0 && size.y > 2.0 && rr.unit() < 0.5 {
+            let c = DVec2::new(
+                rr.range(ilo.x + 1.0, ihi.x - 1.0),
+                rr.range(ilo.y + 1.0, ihi.y - 1.0),
+            );
+            let (hx, hy) = (0.8, 0.5);
+            b.quad(
+                &format!("{name}rug"),
+                [
+                    DVec3::new(c.x - hx, c.y - hy, zf),
+                    DVec3::new(c.x + hx, c.y - hy, zf),
+                    DVec3::new(c.x + hx, c.y + hy, zf),
+                    DVec3::new(c.x - hx, c.y + hy, zf),
+                ],
+                b.mats.rug,
+            );
+        }
+        if size.x > 1.5 && rr.unit() < 0.5 {
+            // On the inner face of the room's −y wall, facing +y.
+            let x = rr.range(ilo.x + 0.2, ihi.x - 0.8);
+            let y = ilo.y;
+            b.quad(
+                &format!("{name}pic"),
+                [
+                    DVec3::new(x, y, zf + 1.3),
+                    DVec3::new(x, y, zf + 1.7),
+                    DVec3::new(x + 0.6, y, zf + 1.7),
+                    DVec3::new(x + 0.6, y, zf + 1.3),
+                ],
+                b.mats.picture,
+            );
+        }
+    }
+
+    // Furniture.
+    let wood = b.mats.wood;
+    let metal = b.mats.metal;
+    for k in 0..cfg.furniture.min(4) {
+        let fname = format!("{name}f{k}");
+        if size.x < 1.8 || size.y < 1.8 {
+            break;
+        }
+        match rf.below(3) {
+            0 => {
+                // A desk: top and four legs piercing it, sunk into the floor.
+                let c = DVec2::new(
+                    rf.range(ilo.x + 0.9, ihi.x - 0.9),
+                    rf.range(ilo.y + 0.6, ihi.y - 0.6),
+                );
+                let (hx, hy) = (0.7, 0.35);
+                let top = zf + 0.76;
+                b.aabb(
+                    &format!("{fname}top"),
+                    DVec3::new(c.x - hx, c.y - hy, top - 0.04),
+                    DVec3::new(c.x + hx, c.y + hy, top),
+                    [wood; 6],
+                );
+                let sink = rf.range(0.0, 0.02);
+                for (l, (sx, sy)) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                    .into_iter()
+                    .enumerate()
+                {
+                    let p = c + DVec2::new(sx * (hx - 0.06), sy * (hy - 0.06));
+                    b.aabb(
+                        &format!("{fname}leg{l}"),
+                        DVec3::new(p.x - 0.025, p.y - 0.025, zf - sink),
+                        DVec3::new(p.x + 0.025, p.y + 0.025, top - 0.02),
+                        [metal; 6],
+                    );
+                }
+                if cfg.extras {
+                    // A sheet of paper on the top, at an angle.
+                    let a = rf.range(0.0, std::f64::consts::PI);
+                    let (s_, c_) = a.sin_cos();
+                    let (w, h) = (0.105, 0.1485);
+                    let q = |x: f64, y: f64| {
+                        DVec3::new(c.x + c_ * x - s_ * y, c.y + s_ * x + c_ * y, top)
+                    };
+                    b.quad(
+                        &format!("{fname}paper"),
+                        [q(-w, -h), q(w, -h), q(w, h), q(-w, h)],
+                        b.mats.paper,
+                    );
+                }
+            }
+            1 => {
+                // A cabinet pushed 2 cm into the −x wall.
+                let y = rf.range(ilo.y + 0.5, ihi.y - 0.5);
+                let x0 = ilo.x - 0.02;
+                b.aabb(
+                    &fname,
+                    DVec3::new(x0, y - 0.45, zf - rf.range(0.0, 0.01)),
+                    DVec3::new(x0 + 0.5, y + 0.45, zf + 1.8),
+                    [wood; 6],
+                );
+            }
+            _ => {
+                // A box at an arbitrary angle, sunk a little.
+                let c = DVec2::new(
+                    rf.range(ilo.x + 0.8, ihi.x - 0.8),
+                    rf.range(ilo.y + 0.8, ihi.y - 0.8),
+                );
+                let a = rf.range(0.0, std::f64::consts::TAU);
+                b.rotated(
+                    &fname,
+                    c,
+                    DVec2::new(rf.range(0.6, 1.4), rf.range(0.4, 0.8)),
+                    a,
+                    zf - rf.range(0.0, 0.015),
+                    zf + rf.range(0.4, 0.9),
+                    [wood; 6],
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,350 @@
+//! Faces cut into pieces in their own plane, assembled back into the mesh:
+//! what `ugisect`, `ugcopl` and `ugcut` share.
+//!
+//! A face's contours (and whatever else divides it: cuts, a coplanar
+//! neighbour's contours) go into a snap-rounded planar arrangement
+//! ([`geom::arrange`]) in the face's frame; its faces become the pieces.
+//! Points of the arrangement map back to vertices: the face's own vertices,
+//! vertices given with the extra segments, and new points (crossings) made
+//! into vertices through a [`Snapper`], which reuses any vertex of the mesh
+//! within epsilon, so that the same crossing found in two faces is one
+//! vertex.
+
+use geom::arrange::{Arrangement, Options, Segment, Tag, arrange};
+use geom::{DVec2, DVec3, Frame};
+use rustc_hash::FxHashMap;
+use ug::{Face, FaceId, VertexId};
+
+use crate::Mesh;
+
+/// The vertices of a mesh on a grid, for "the vertex within epsilon".
+pub struct Snapper {
+    eps: f64,
+    cell: f64,
+    grid: FxHashMap<(i64, i64, i64), Vec<VertexId>>,
+    /// Vertices created.
+    pub created: usize,
+}
+
+impl Snapper {
+    /// Every live vertex of the mesh.
+    pub fn new(mesh: &Mesh, eps: f64) -> Snapper {
+        let mut s = Snapper {
+            eps,
+            cell: (2.0 * eps).max(f64::MIN_POSITIVE),
+            grid: FxHashMap::default(),
+            created: 0,
+        };
+        for v in mesh.vertices() {
+            s.insert(v, mesh.pos(v));
+        }
+        s
+    }
+
+    fn key(&self, p: DVec3) -> (i64, i64, i64) {
+        let k = (p / self.cell).floor();
+        (k.x as i64, k.y as i64, k.z as i64)
+    }
+
+    fn insert(&mut self, v: VertexId, p: DVec3) {
+        let k = self.key(p);
+        self.grid.entry(k).or_default().push(v);
+    }
+
+    /// The nearest live vertex within epsilon (the lowest id on ties).
+    pub fn find(&self, mesh: &Mesh, p: DVec3) -> Option<VertexId> {
+        let (x, y, z) = self.key(p);
+        let mut best: Option<(f64, VertexId)> = None;
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    for &v in self
+                        .grid
+                        .get(&(x + dx, y + dy, z + dz))
+                        .into_iter()
+                        .flatten()
+                    {
+                        if !mesh.is_vertex_live(v) {
+                            continue;
+                        }
+                        let d = mesh.pos(v).distance(p);
+                        if d <= self.eps && best.is_none_or(|(b, w)| d < b || (d == b && v < w)) {
+                            best = Some((d, v));
+                        }
+                    }
+                }
+            }
+        }
+        best.map(|b| b.1)
+    }
+
+    /// The vertex within epsilon of `p`, or a new one named after `name`.
+    pub fn vertex(&mut self, mesh: &mut Mesh, p: DVec3, name: &str) -> VertexId {
+        if let Some(v) = self.find(mesh, p) {
+            return v;
+        }
+        let v = mesh.add_vertex(Some(name), p);
+        self.insert(v, p);
+        self.created += 1;
+        v
+    }
+}
+
+/// A point of a piece: a vertex given to the layout, or a new point
+/// (a crossing, a cut's extension) at this position.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Point {
+    Vertex(VertexId),
+    New(DVec3),
+}
+
+/// A face laid out for an arrangement: its frame, the vertices given to it
+/// as points, and segments between them.
+#[derive(Clone, Debug)]
+pub struct Layout {
+    pub frame: Frame,
+    /// The vertex of each input point.
+    pub ids: Vec<VertexId>,
+    pub points: Vec<DVec2>,
+    pub segments: Vec<Segment>,
+    index: FxHashMap<VertexId, u32>,
+}
+
+impl Layout {
+    /// An empty layout in `frame`.
+    pub fn new(frame: Frame) -> Layout {
+        Layout {
+            frame,
+            ids: Vec::new(),
+            points: Vec::new(),
+            segments: Vec::new(),
+            index: FxHashMap::default(),
+        }
+    }
+
+    /// The frame of a face's outer contour (Newell normal through its first
+    /// vertex), `None` for a face without a normal.
+    pub fn frame_of(pts: &[Vec<DVec3>]) -> Option<Frame> {
+        let n = geom::face_normal(pts)?;
+        Some(Frame::new(pts[0][0], n))
+    }
+
+    /// A face of the mesh, its contour edges as `Toggle(0)` segments.
+    pub fn of_face(mesh: &Mesh, f: FaceId) -> Option<Layout> {
+        let frame = Layout::frame_of(&mesh.face_points(f))?;
+        let mut l = Layout::new(frame);
+        l.contours(&mesh.face(f).contours, Tag::Toggle(0), |v| mesh.pos(v));
+        Some(l)
+    }
+
+    /// Adds closed contours as segments with `tag`.
+    pub fn contours(
+        &mut self,
+        contours: &[Vec<VertexId>],
+        tag: Tag,
+        pos: impl Fn(VertexId) -> DVec3,
+    ) {
+        for c in contours {
+            let n = c.len();
+            for i in 0..n {
+                let (a, b) = (c[i], c[(i + 1) % n]);
+                self.segment(a, pos(a), b, pos(b), tag);
+            }
+        }
+    }
+
+    /// The input point of vertex `v` at `p` (added on first use).
+    pub fn point(&mut self, v: VertexId, p: DVec3) -> u32 {
+        if let Some(&k) = self.index.get(&v) {
+            return k;
+        }
+        let k = self.ids.len() as u32;
+        self.ids.push(v);
+        self.points.push(self.frame.to_2d(p));
+        self.index.insert(v, k);
+        k
+    }
+
+    /// Adds the segment between two vertices with `tag`.
+    pub fn segment(&mut self, a: VertexId, pa: DVec3, b: VertexId, pb: DVec3, tag: Tag) {
+        let (a, b) = (self.point(a, pa), self.point(b, pb));
+        if a != b {
+            self.segments.push(Segment { a, b, tag });
+        }
+    }
+
+    /// The arrangement of everything added, snapped at `eps`.
+    pub fn arrange(&self, eps: f64, extend_cuts: bool) -> Arrangement {
+        let mut o = Options::new(eps);
+        o.extend_cuts = extend_cuts;
+        arrange(&self.points, &self.segments, &o)
+    }
+
+    /// The loops of an arrangement face as points: input points are their
+    /// vertices (merged ones their representative's), the others new
+    /// points in 3-D (on the frame's plane).
+    pub fn loops(&self, arr: &Arrangement, face: &geom::arrange::Face) -> Vec<Vec<Point>> {
+        face.loops
+            .iter()
+            .map(|l| {
+                l.iter()
+                    .map(|&k| {
+                        if (k as usize) < arr.inputs {
+                            Point::Vertex(self.ids[arr.rep[k as usize] as usize])
+                        } else {
+                            Point::New(self.frame.to_3d(arr.points[k as usize]))
+                        }
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+}
+
+/// Loops of points as contours of vertices: `vertex` makes (or finds) the
+/// vertex of a new point. Consecutive repeats (two points that became one
+/// vertex) are dropped; loops left with fewer than three vertices go.
+pub fn to_contours(
+    loops: &[Vec<Point>],
+    mut vertex: impl FnMut(DVec3) -> VertexId,
+) -> Vec<Vec<VertexId>> {
+    let mut out = Vec::new();
+    for l in loops {
+        let mut c: Vec<VertexId> = Vec::with_capacity(l.len());
+        for p in l {
+            let v = match *p {
+                Point::Vertex(v) => v,
+                Point::New(q) => vertex(q),
+            };
+            if c.last() != Some(&v) {
+                c.push(v);
+            }
+        }
+        while c.len() > 1 && c.first() == c.last() {
+            c.pop();
+        }
+        if c.len() >= 3 {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// Whether two contour lists describe the same face: the same loops, each up
+/// to rotation, in any order.
+pub fn same_contours(a: &[Vec<VertexId>], b: &[Vec<VertexId>]) -> bool {
+    fn canon(c: &[VertexId]) -> Vec<VertexId> {
+        let k = (0..c.len()).min_by_key(|&i| c[i]).unwrap_or(0);
+        c[k..].iter().chain(&c[..k]).copied().collect()
+    }
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut x: Vec<Vec<VertexId>> = a.iter().map(|c| canon(c)).collect();
+    let mut y: Vec<Vec<VertexId>> = b.iter().map(|c| canon(c)).collect();
+    x.sort();
+    y.sort();
+    x == y
+}
+
+/// What [`repair`] did to a face.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Repair {
+    /// Its contours were sound already.
+    Sound,
+    /// Replaced by these faces (the first keeps the face's id).
+    Pieces(Vec<FaceId>),
+    /// Nothing with area was left; the face was removed.
+    Removed,
+}
+
+/// Makes a face's contours sound: snap-rounded at `eps` in its plane,
+/// crossings become vertices, the even-odd region is kept and split into
+/// its connected pieces (a contour that crosses itself, touches itself, a
+/// spike, collinear runs one ulp off the line, a hole touching the outer
+/// contour, contours meeting at a point). The first piece keeps the face
+/// (its name, id and place), the others follow it named `NAME.rK`.
+pub fn repair(
+    mesh: &mut Mesh,
+    f: FaceId,
+    eps: f64,
+    snap: &mut Snapper,
+    name: &str,
+    frame: impl Fn(&[Vec<DVec3>]) -> Option<Frame>,
+) -> Repair {
+    let Some(frame) = frame(&mesh.face_points(f)) else {
+        mesh.remove_face(f);
+        return Repair::Removed;
+    };
+    let mut layout = Layout::new(frame);
+    layout.contours(&mesh.face(f).contours, Tag::Toggle(0), |v| mesh.pos(v));
+    let arr = layout.arrange(eps, false);
+    let inside: Vec<Vec<Vec<Point>>> = arr
+        .faces
+        .iter()
+        .filter(|a| a.has(0))
+        .map(|a| layout.loops(&arr, a))
+        .collect();
+    let mut k = 0;
+    let mut pieces: Vec<Vec<Vec<VertexId>>> = Vec::new();
+    for l in &inside {
+        let c = to_contours(l, |p| {
+            k += 1;
+            snap.vertex(mesh, p, &format!("{name}.x{k}"))
+        });
+        if !c.is_empty() {
+            pieces.push(c);
+        }
+    }
+    if pieces.len() == 1 && same_contours(&pieces[0], &mesh.face(f).contours) {
+        return Repair::Sound;
+    }
+    replace(mesh, f, pieces, name, "r")
+}
+
+/// Replaces face `f` by `pieces` (contour lists), keeping its material; the
+/// first piece keeps the face's id, name and place, the others follow it
+/// named `NAME.TAGk` (unnamed faces give unnamed pieces).
+pub fn replace(
+    mesh: &mut Mesh,
+    f: FaceId,
+    pieces: Vec<Vec<Vec<VertexId>>>,
+    name: &str,
+    tag: &str,
+) -> Repair {
+    if pieces.is_empty() {
+        mesh.remove_face(f);
+        return Repair::Removed;
+    }
+    let face = mesh.face(f).clone();
+    let mut it = pieces.into_iter();
+    let first = it.next().expect("one piece");
+    let mut ids = Vec::new();
+    if mesh.set_face_contours(f, first) {
+        ids.push(f);
+    }
+    let _ = name;
+    let mut k = 1;
+    let mut last = f;
+    for c in it {
+        k += 1;
+        let pname = face.name.as_ref().map(|n| format!("{n}.{tag}{k}"));
+        let g = mesh.add_face(
+            Some(last),
+            Face {
+                name: pname,
+                contours: c,
+                material: face.material,
+            },
+        );
+        if mesh.is_face_live(g) {
+            ids.push(g);
+            last = g;
+        }
+    }
+    if ids.is_empty() {
+        Repair::Removed
+    } else {
+        Repair::Pieces(ids)
+    }
+}

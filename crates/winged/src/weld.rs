@@ -1,0 +1,348 @@
+//! Welding within a tolerance: the first two steps of the grouper (Smith
+//! 1991, §2.4), on the winged-edge mesh, for every tool that needs shared
+//! vertices and no T-vertices (`ugvlmerge`, `ugisect`, `ugcopl`, `ugcut`,
+//! `ugflip` for adjacency):
+//!
+//! 1. [`merge_vertices`]: vertices within `eps` of an earlier vertex (in
+//!    statement order) are replaced by it, found with an R*-tree; faces left
+//!    without area are dropped;
+//! 2. [`split_edges`]: every vertex of a face that lies within `eps` of the
+//!    interior of an edge is inserted into that edge, in every face that
+//!    uses it, in order along the edge (no T-vertex remains).
+
+use std::collections::hash_map::Entry;
+
+use geom::{BoxIndex, DVec3, newell_normal, point_segment_distance};
+use rustc_hash::{FxHashMap, FxHashSet};
+
+use crate::{EdgeId, FaceId, Mesh, VertexId};
+
+/// Edge splitting repeats on the edges it created until nothing changes, at most this often.
+const MAX_SPLIT_PASSES: usize = 16;
+
+/// Why a live face has no usable area, decided as `ugcheck` does: an edge no
+/// longer than `eps`, or an outer contour whose area is at most `eps` times
+/// the face's size. `None` for a sound face.
+pub fn degeneracy(mesh: &Mesh, f: FaceId, eps: f64) -> Option<&'static str> {
+    let pts = mesh.face_points(f);
+    if pts.is_empty() {
+        return Some("no contour");
+    }
+    for c in &pts {
+        let n = c.len();
+        if (0..n).any(|i| c[i].distance(c[(i + 1) % n]) <= eps) {
+            return Some("a zero-length edge");
+        }
+    }
+    let (lo, hi) = geom::index::bbox(pts.iter().flatten().copied(), 0.0);
+    let size = (hi - lo).length();
+    let area = newell_normal(&pts[0]).length() / 2.0;
+    // NaN counts as no area.
+    if area.partial_cmp(&(eps * size)) != Some(std::cmp::Ordering::Greater) {
+        return Some("zero area (its vertices are collinear)");
+    }
+    None
+}
+
+/// An R*-tree of vertex positions (point boxes).
+fn point_index(mesh: &Mesh, verts: &[VertexId]) -> BoxIndex {
+    BoxIndex::new(verts.iter().map(|&v| {
+        let p = mesh.pos(v);
+        (p, p, v.0)
+    }))
+}
+
+/// Vertex positions in an R*-tree, queried along segments.
+pub struct Points {
+    tree: BoxIndex,
+    /// Segments whose box is wide in two or more directions are queried in
+    /// pieces no wider than this (1/256 of the points' bounding-box diagonal),
+    /// so that a long diagonal edge does not look at half the model.
+    step: f64,
+}
+
+impl Points {
+    pub fn new(mesh: &Mesh, verts: &[VertexId]) -> Points {
+        let (lo, hi) = geom::index::bbox(verts.iter().map(|&v| mesh.pos(v)), 0.0);
+        let diag = (hi - lo).length();
+        Points {
+            tree: point_index(mesh, verts),
+            step: if diag > 0.0 {
+                diag / 256.0
+            } else {
+                f64::INFINITY
+            },
+        }
+    }
+
+    /// Ids of the points in the boxes around the segment [a, b] grown by
+    /// `eps` (a superset of those within `eps` of it), ascending.
+    pub fn along(&self, a: DVec3, b: DVec3, eps: f64) -> Vec<u32> {
+        let pad = DVec3::splat(eps);
+        let mut ext = (b - a).abs().to_array();
+        ext.sort_by(f64::total_cmp);
+        let pieces = if ext[1] > self.step {
+            (ext[1] / self.step).ceil().min(1024.0) as usize
+        } else {
+            1
+        };
+        if pieces == 1 {
+            return self.tree.query(a.min(b) - pad, a.max(b) + pad);
+        }
+        let mut ids = Vec::new();
+        for k in 0..pieces {
+            let p = a.lerp(b, k as f64 / pieces as f64);
+            let q = a.lerp(b, (k + 1) as f64 / pieces as f64);
+            ids.extend(self.tree.query(p.min(q) - pad, p.max(q) + pad));
+        }
+        ids.sort_unstable();
+        ids.dedup();
+        ids
+    }
+}
+
+/// Step 1: replaces every vertex that lies within `eps` of an earlier vertex
+/// (statement order) that is itself kept, by the earliest such vertex, in
+/// faces and wires, and removes it. Then drops faces that are left without
+/// area. Returns the number of vertices merged and the dropped faces with
+/// the reason, in statement order.
+pub fn merge_vertices(mesh: &mut Mesh, eps: f64) -> (usize, Vec<(FaceId, String)>) {
+    let order: Vec<VertexId> = mesh.vertices().collect();
+    let nv = mesh.model().vertices.len();
+    let mut rank = vec![u32::MAX; nv];
+    for (k, &v) in order.iter().enumerate() {
+        rank[v.idx()] = k as u32;
+    }
+    // Exact repeats follow the first vertex at their position (which is kept
+    // or follows the same earlier vertex as they would); only the first
+    // vertex at each position goes into the R*-tree.
+    let key = |p: DVec3| (p + DVec3::ZERO).to_array().map(f64::to_bits); // -0 == 0
+    let mut first_at: FxHashMap<[u64; 3], VertexId> = FxHashMap::default(); // lookup only
+    let mut exact: Vec<Option<VertexId>> = vec![None; nv];
+    let mut distinct: Vec<VertexId> = Vec::with_capacity(order.len());
+    for &v in &order {
+        match first_at.entry(key(mesh.pos(v))) {
+            Entry::Occupied(e) => exact[v.idx()] = Some(*e.get()),
+            Entry::Vacant(e) => {
+                e.insert(v);
+                distinct.push(v);
+            }
+        }
+    }
+    let index = point_index(mesh, &distinct);
+    let mut rep: Vec<VertexId> = (0..nv as u32).map(VertexId).collect();
+    let pad = DVec3::splat(eps);
+    let mut merged = 0;
+    for &v in &order {
+        if let Some(first) = exact[v.idx()] {
+            rep[v.idx()] = rep[first.idx()];
+            merged += 1;
+            continue;
+        }
+        let p = mesh.pos(v);
+        let mut best: Option<VertexId> = None;
+        for id in index.query(p - pad, p + pad) {
+            let u = VertexId(id);
+            if rank[u.idx()] >= rank[v.idx()] || rep[u.idx()] != u {
+                continue;
+            }
+            if mesh.pos(u).distance(p) > eps {
+                continue;
+            }
+            if best.is_none_or(|b| rank[u.idx()] < rank[b.idx()]) {
+                best = Some(u);
+            }
+        }
+        if let Some(u) = best {
+            rep[v.idx()] = u;
+            merged += 1;
+        }
+    }
+
+    let faces: Vec<FaceId> = mesh.faces().collect();
+    let mut dropped = Vec::new();
+    if merged > 0 {
+        for &f in &faces {
+            let face = mesh.face(f);
+            if !face.contours.iter().flatten().any(|&v| rep[v.idx()] != v) {
+                continue;
+            }
+            let contours: Vec<Vec<VertexId>> = face
+                .contours
+                .iter()
+                .map(|c| c.iter().map(|&v| rep[v.idx()]).collect())
+                .collect();
+            if distinct_after_cleaning(&contours[0]) < 3 {
+                mesh.remove_face(f);
+                dropped.push((
+                    f,
+                    "fewer than 3 distinct vertices after merging nearly coincident vertices"
+                        .to_string(),
+                ));
+            } else {
+                // Holes left without three distinct vertices are dropped here.
+                mesh.set_face_contours(f, contours);
+            }
+        }
+        let in_wire: FxHashSet<VertexId> = mesh
+            .model()
+            .wires
+            .iter()
+            .flat_map(|w| w.polylines.iter().flatten().copied())
+            .collect();
+        for &v in &order {
+            let r = rep[v.idx()];
+            if r != v {
+                if in_wire.contains(&v) {
+                    mesh.replace_vertex(v, r); // faces no longer use v: only wires change
+                }
+                mesh.remove_vertex(v);
+            }
+        }
+    }
+    for &f in &faces {
+        if mesh.is_face_live(f)
+            && let Some(reason) = degeneracy(mesh, f, eps)
+        {
+            mesh.remove_face(f);
+            dropped.push((f, reason.to_string()));
+        }
+    }
+    let mut frank = vec![u32::MAX; mesh.model().faces.len()];
+    for (k, &f) in faces.iter().enumerate() {
+        frank[f.idx()] = k as u32;
+    }
+    dropped.sort_by_key(|(f, _)| frank[f.idx()]);
+    (merged, dropped)
+}
+
+/// Distinct vertices of a contour once consecutive repeats are removed.
+fn distinct_after_cleaning(c: &[VertexId]) -> usize {
+    let mut d: Vec<VertexId> = c.to_vec();
+    d.sort_unstable();
+    d.dedup();
+    d.len()
+}
+
+/// What [`split_edges`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Split {
+    /// Vertices inserted into edges.
+    pub inserted: usize,
+    /// Edges split.
+    pub edges: usize,
+    /// Passes made (the later ones check only the edges the previous one made).
+    pub passes: usize,
+}
+
+/// The vertices of `index` that lie within `eps` of the interior of edge `e`
+/// (farther than `eps` from both ends), still used by a face, in order from
+/// `e.v[0]` to `e.v[1]`.
+fn vertices_on_edge(mesh: &Mesh, index: &Points, e: EdgeId, eps: f64) -> Vec<VertexId> {
+    let ed = mesh.edge(e);
+    let (a, b) = (mesh.pos(ed.v[0]), mesh.pos(ed.v[1]));
+    let mut on: Vec<(f64, VertexId)> = Vec::new();
+    for id in index.along(a, b, eps) {
+        let v = VertexId(id);
+        if v == ed.v[0] || v == ed.v[1] || mesh.vertex_edges(v).is_empty() {
+            continue;
+        }
+        let p = mesh.pos(v);
+        if p.distance(a) <= eps || p.distance(b) <= eps {
+            continue;
+        }
+        let (d, t) = point_segment_distance(p, a, b);
+        if d <= eps {
+            on.push((t, v));
+        }
+    }
+    on.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+    on.into_iter().map(|(_, v)| v).collect()
+}
+
+/// Step 2: inserts every vertex of a sound face (see [`degeneracy`]) that
+/// lies within `eps` of the interior of an edge of a sound face into that
+/// edge, in every face that uses the edge, several along one edge in order.
+/// Each face is rewritten once per pass; later passes check only the edges
+/// the previous one created (a vertex inserted slightly off the line can
+/// bring another within reach), until nothing changes.
+pub fn split_edges(mesh: &mut Mesh, eps: f64) -> Split {
+    let faces: Vec<FaceId> = mesh.faces().collect();
+    let mut sound = vec![false; mesh.model().faces.len()];
+    for &f in &faces {
+        sound[f.idx()] = degeneracy(mesh, f, eps).is_none();
+    }
+    let mut verts: Vec<VertexId> = faces
+        .iter()
+        .filter(|f| sound[f.idx()])
+        .flat_map(|&f| mesh.face(f).contours.iter().flatten().copied())
+        .collect();
+    verts.sort_unstable();
+    verts.dedup();
+    let index = Points::new(mesh, &verts);
+    let uses_sound = |mesh: &Mesh, e: EdgeId| {
+        mesh.edge(e)
+            .uses
+            .iter()
+            .any(|u| sound.get(u.face.idx()).copied().unwrap_or(false))
+    };
+    let mut work: Vec<EdgeId> = mesh.edges().filter(|&e| uses_sound(mesh, e)).collect();
+    let mut st = Split::default();
+    while !work.is_empty() && st.passes < MAX_SPLIT_PASSES {
+        st.passes += 1;
+        let mut plan: FxHashMap<EdgeId, Vec<VertexId>> = FxHashMap::default(); // lookup only
+        let mut touched: Vec<FaceId> = Vec::new();
+        for &e in &work {
+            if !mesh.is_edge_live(e) {
+                continue;
+            }
+            let on = vertices_on_edge(mesh, &index, e, eps);
+            if on.is_empty() {
+                continue;
+            }
+            st.inserted += on.len();
+            st.edges += 1;
+            touched.extend(mesh.edge(e).faces());
+            plan.insert(e, on);
+        }
+        if plan.is_empty() {
+            break;
+        }
+        touched.sort_unstable();
+        touched.dedup();
+        let newest = mesh.edges().map(|e| e.0).max().unwrap_or(0);
+        for &f in &touched {
+            let face = mesh.face(f);
+            let contours: Vec<Vec<VertexId>> = face
+                .contours
+                .iter()
+                .enumerate()
+                .map(|(ci, c)| {
+                    let es = mesh.contour_edges(f, ci);
+                    let mut out = Vec::with_capacity(c.len() + 2);
+                    for (i, &v) in c.iter().enumerate() {
+                        out.push(v);
+                        if let Some(list) = plan.get(&es[i]) {
+                            if v == mesh.edge(es[i]).v[0] {
+                                out.extend(list.iter().copied());
+                            } else {
+                                out.extend(list.iter().rev().copied());
+                            }
+                        }
+                    }
+                    out
+                })
+                .collect();
+            mesh.set_face_contours(f, contours);
+        }
+        work = touched
+            .iter()
+            .filter(|&&f| mesh.is_face_live(f))
+            .flat_map(|&f| mesh.face_edges(f))
+            .filter(|&e| e.0 > newest && uses_sound(mesh, e))
+            .collect();
+        work.sort_unstable();
+        work.dedup();
+    }
+    st
+}
