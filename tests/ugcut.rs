@@ -161,10 +161,11 @@ fn length_as_percentage_and_bad_lengths() {
         assert_eq!(out.status.code(), Some(2), "-l {bad}");
         assert!(out.stdout.is_empty());
     }
+    // Without -l, the default length is 2% of the diagonal.
     assert_eq!(
-        run("ugcut", &[p], None).status.code(),
-        Some(2),
-        "-l is required"
+        run_ok("ugcut", &[p], None),
+        run_ok("ugcut", &["-l", "2%", p], None),
+        "-l defaults to 2%"
     );
 }
 

@@ -184,6 +184,31 @@ impl Writer<'_, '_> {
         }
         let mut early: Vec<bool> = Vec::new();
         for (k, it) in items.iter().enumerate() {
+            // Comments just before a face stay next to it (annotations such
+            // as ugcopl's origin notes): its vertices go before them.
+            if matches!(it, Item::Comment(_))
+                && (k == 0 || !matches!(items[k - 1], Item::Comment(_)))
+                && let Some(j) = (k..items.len()).find(|&j| !matches!(items[j], Item::Comment(_)))
+            {
+                let names: &[Vec<VertexId>] = match &items[j] {
+                    Item::Face(f) => &self.m.faces[f.idx()].contours,
+                    Item::Wire(w) => &self.m.wires[w.idx()].polylines,
+                    _ => &[],
+                };
+                for &v in names.iter().flatten() {
+                    if at.get(v.idx()).is_some_and(|&p| p != NOWHERE && p as usize > k)
+                        && !early.get(v.idx()).copied().unwrap_or(false)
+                    {
+                        if early.is_empty() {
+                            early = vec![false; self.m.vertices.len()];
+                        }
+                        early[v.idx()] = true;
+                        self.indent(depth);
+                        self.item(&Item::Vertex(v), depth);
+                        self.out.push(b'\n');
+                    }
+                }
+            }
             let names: &[Vec<VertexId>] = match it {
                 Item::Face(f) => &self.m.faces[f.idx()].contours,
                 Item::Wire(w) => &self.m.wires[w.idx()].polylines,

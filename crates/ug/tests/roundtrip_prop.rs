@@ -490,7 +490,25 @@ fn hoisted(m: &Model) -> Model {
         }
         let mut early = HashSet::new();
         let mut out = Vec::new();
+        let names_of = |it: &Item| -> Vec<VertexId> {
+            match it {
+                Item::Face(f) => m.faces[f.idx()].contours.concat(),
+                Item::Wire(w) => m.wires[w.idx()].polylines.concat(),
+                _ => Vec::new(),
+            }
+        };
         for (k, it) in items.iter().enumerate() {
+            // Vertices of a face go before the comments just before it.
+            if matches!(it, Item::Comment(_))
+                && (k == 0 || !matches!(items[k - 1], Item::Comment(_)))
+                && let Some(j) = (k..items.len()).find(|&j| !matches!(items[j], Item::Comment(_)))
+            {
+                for v in names_of(&items[j]) {
+                    if at.get(&v).is_some_and(|&p| p > k) && early.insert(v) {
+                        out.push(Item::Vertex(v));
+                    }
+                }
+            }
             let names: Vec<VertexId> = match it {
                 Item::Face(f) => m.faces[f.idx()].contours.concat(),
                 Item::Wire(w) => m.wires[w.idx()].polylines.concat(),
