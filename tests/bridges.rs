@@ -629,3 +629,38 @@ fn cornell_box_obj_runs_through_the_whole_pipeline() {
     }
     assert!(range["white"].1 > 0.0, "{range:?}");
 }
+
+/// Issue #13: a hole hung on the outline at one repeated vertex
+/// (fixtures/bridges/one-vertex-seam.mgf) converts without a warning into
+/// a face with a hole, which the chain and ugcut turn into clean patches
+/// with the wall's area (12 less the 3 of the window).
+#[test]
+fn mgf2ug_one_vertex_seam() {
+    let out = run("mgf2ug", &[&path("bridges/one-vertex-seam.mgf")], None);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        out.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let ug = String::from_utf8(out.stdout).unwrap();
+    let m = parse_flat(&ug, "mgf2ug");
+    assert_eq!(m.faces.len(), 1);
+    assert_eq!(m.faces[0].contours.len(), 2);
+    let r = report(&ug);
+    assert!(
+        (area(&r, "white") - 9.0).abs() < 1e-12,
+        "{}",
+        area(&r, "white")
+    );
+    let cut = run_ok("ugcut", &["-l", "0.5"], Some(ug.as_bytes()));
+    let r = report(&cut);
+    assert!((area(&r, "white") - 9.0).abs() < 1e-9);
+    for key in ["nonpatch", "tvertices", "degenerate", "overlapping"] {
+        assert_eq!(r[key].as_array().unwrap().len(), 0, "{key}: {}", r[key]);
+    }
+}

@@ -203,3 +203,57 @@ fn collinear_boundary_vertices_and_thin_strips_keep_their_area() {
         assert!((a - b).abs() <= 1e-9 * a, "{name}: area {a} → {b}");
     }
 }
+
+/// Issue #13's wall (fixtures/cut/ulp-wall.ug): collinear vertices on the
+/// top edge, vertices one ulp off the plane. Meshed into patches at every
+/// length, without a warning, T-vertex or sliver, area kept, and every
+/// input vertex still a patch corner (no T-vertex for a neighbour).
+#[test]
+fn a_wall_jittered_by_one_ulp_is_meshed() {
+    let input = std::fs::read(fixture("cut/ulp-wall.ug")).unwrap();
+    let src = ug::parse(&input[..], "in").unwrap().model;
+    for len in ["2%", "0.5", "0.05"] {
+        let out = run("ugcut", &["-l", len], Some(&input));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(
+            out.stderr.is_empty(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8(out.stdout).unwrap();
+        let r = check(&text);
+        for key in [
+            "nonpatch",
+            "tvertices",
+            "degenerate",
+            "overlapping",
+            "inconsistent",
+        ] {
+            assert_eq!(count(&r, key), 0, "-l {len}: {key}: {}", r[key]);
+        }
+        let area = r["area_by_material"][0]["area"].as_f64().unwrap();
+        let want = (17.986 - 14.9505) * 2.8;
+        assert!(
+            (area - want).abs() <= 1e-9 * want,
+            "-l {len}: {area} vs {want}"
+        );
+        let m = ug::parse(text.as_bytes(), "out").unwrap().model;
+        let used: std::collections::HashSet<&str> = m
+            .faces
+            .iter()
+            .flat_map(|f| f.contours.iter().flatten())
+            .map(|&v| m.vertex(v).name.as_str())
+            .collect();
+        for v in &src.vertices {
+            assert!(
+                used.contains(v.name.as_str()),
+                "-l {len}: {} unused",
+                v.name
+            );
+        }
+    }
+}

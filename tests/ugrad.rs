@@ -200,19 +200,6 @@ fn cornell_box_converges_with_shadows_and_refined_shadow_edges() {
 }
 
 #[test]
-fn faces_that_are_not_patches_are_refused() {
-    let out = run(
-        "ugrad",
-        &[fixture("check/nonpatch.ug").to_str().unwrap()],
-        None,
-    );
-    assert_eq!(out.status.code(), Some(2));
-    assert!(out.stdout.is_empty());
-    let err = String::from_utf8(out.stderr).unwrap();
-    assert!(err.contains("run ugcut first"), "{err}");
-}
-
-#[test]
 fn options_change_what_is_written() {
     let input = patches("red-cube.ug", "0.5");
     let full = run_ok("ugrad", &["--max-shots", "5"], Some(input.as_bytes()));
@@ -236,11 +223,79 @@ fn options_change_what_is_written() {
     };
     assert!(light_b(&full)[0] >= 5.0);
     assert!(light_b(&irr)[0] < 5.0);
-    // A dark model: warning, all black, exit 0.
+    // A dark model: an error (exit 1, nothing on stdout, how to fix it)...
     let dark = patches("check/clean-box.ug", "1");
     let out = run("ugrad", &[], Some(dark.as_bytes()));
+    assert_eq!(out.status.code(), Some(1));
+    assert!(out.stdout.is_empty());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("nothing in the model emits light"), "{err}");
+    assert!(
+        err.contains("emission_rgb") && err.contains("--allow-dark"),
+        "{err}"
+    );
+    // ... unless --allow-dark: a warning, every vertex black, exit 0.
+    let out = run("ugrad", &["--allow-dark"], Some(dark.as_bytes()));
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("nothing in the model emits light"));
+    let m = ug::parse(&out.stdout[..], "o").unwrap().model;
+    assert!(!m.vertices.is_empty());
+    assert!(
+        m.vertices
+            .iter()
+            .all(|v| v.color.is_some_and(|c| m.material(c).diffuse() == [0.0; 3]))
+    );
+}
+
+/// Faces that are not patches (a pentagon, a face with a hole, a concave
+/// quad) are meshed as ugcut would, with one warning: `ugvlmerge | ugrad`
+/// works. The result has every input face's area, lit.
+#[test]
+fn meshes_faces_that_are_not_patches() {
+    let input = "\
+defmat lamp; diffuse_rgb 0.5 0.5 0.5; emission_rgb 10 10 10; end;
+c_rgb white 0.8 0.8 0.8;
+v a 0 0 0; v b 4 0 0; v c 4 4 0; v d 2 5 0; v e 0 4 0;
+v h1 1 1 0; v h2 1 2 0; v h3 2 2 0; v h4 2 1 0;
+v l1 1 1 3; v l2 1 3 3; v l3 3 3 3; v l4 3 1 3;
+f floor (a b c d e) (h1 h2 h3 h4) white;
+v q1 5 0 0; v q2 7 0 0; v q3 6 1 0; v q4 6 3 0;
+f concave (q1 q2 q3 q4) white;
+f light (l1 l2 l3 l4) lamp;
+";
+    let out = run("ugrad", &["--max-shots", "4"], Some(input.as_bytes()));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.matches("warning:").count(), 1, "{err}");
+    assert!(err.contains("2 faces are not patches"), "{err}");
+    let m = ug::parse(&out.stdout[..], "o").unwrap().model;
+    let mut area = 0.0;
+    let mut lit = 0;
+    for f in m.top_faces() {
+        let c = &m.faces[f.idx()].contours;
+        assert_eq!(c.len(), 1);
+        assert!(c[0].len() == 3 || c[0].len() == 4);
+        let pts: Vec<glam::DVec3> = c[0].iter().map(|&v| m.pos(v)).collect();
+        if pts.iter().all(|p| p.z == 0.0) {
+            area += geom::newell_normal(&pts).length() / 2.0;
+        }
+        lit += c[0]
+            .iter()
+            .filter(|&&v| {
+                m.vertices[v.idx()]
+                    .color
+                    .is_some_and(|k| m.material(k).diffuse()[0] > 0.0)
+            })
+            .count();
+    }
+    // The pentagon 4 × 4 + 4 × 1 / 2 less the 1 × 1 hole, and the concave
+    // quad's 2.
+    assert!((area - 19.0).abs() < 1e-9, "{area}");
+    assert!(lit > 0);
 }
 
 #[test]

@@ -61,7 +61,7 @@ fn report(st: &libmesh::patch::Stats, all: bool) {
     list(
         st.repaired
             .iter()
-            .map(|(f, n)| format!("face {f}: its contours cross or touch themselves; repaired into {n} sound piece(s)"))
+            .map(|(f, _)| format!("face {f}: its contours cross or touch themselves, or it is narrower than epsilon somewhere; repaired"))
             .collect(),
         "faces repaired",
     );

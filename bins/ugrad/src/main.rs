@@ -13,7 +13,9 @@ Examples:
   ugrad --max-shots 50 --ambient patches.ug          a quick preview with an ambient term
   ugrad --gradient 0.05 --min-edge 0.02 patches.ug   finer adaptive subdivision
   ugrad --output irradiance patches.ug               write H instead of B
-  ugrad --tail 0 patches.ug                          shoot patch by patch to the end (no tail)";
+  ugrad --tail 0 patches.ug                          shoot patch by patch to the end (no tail)
+  ugvlmerge < in.ug | ugrad > lit.ug                 faces that are not patches are meshed (one warning)
+  ugrad --allow-dark unlit.ug                        no light: write the black model instead of failing";
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
 enum OutputKind {
@@ -47,8 +49,11 @@ enum BackendArg {
 
 /// Progressive radiosity on a patch-meshed UniGrafix model (Smith 1991).
 ///
-/// The input must be patches: triangles and convex quadrilaterals (run ugcut
-/// first). Patches shoot their unshot energy to element vertices with the
+/// The input should be patches: triangles and convex quadrilaterals (run
+/// ugcut first to choose their size). Any other planar polygon is meshed
+/// into patches as ugcut would (at --patch-length, ugcut's default), with one
+/// warning. A model with nothing that emits light is an error unless
+/// --allow-dark. Patches shoot their unshot energy to element vertices with the
 /// exact point-to-polygon form factor; bright shooters are subdivided for
 /// penumbrae; elements whose radiosity changes steeply across an edge are
 /// refined. The output is UG with a colour on every vertex: radiosity B
@@ -121,6 +126,28 @@ struct Args {
     /// Graphics API for the hemi-cube.
     #[arg(long, value_enum, default_value = "auto")]
     gpu_backend: BackendArg,
+    /// Patch length for faces that are not patches (meshed as ugcut -l
+    /// would): model units or a percentage of the bounding-box diagonal.
+    #[arg(long, value_name = "LEN", default_value = "2%")]
+    patch_length: String,
+    /// Write a black model when nothing emits light, instead of failing.
+    #[arg(long)]
+    allow_dark: bool,
+}
+
+/// `--patch-length`: model units, or a percentage of the diagonal.
+fn patch_length(arg: &str, model: &ug::Model, eps: f64) -> Result<f64, cli::Failure> {
+    let diag = model.bounds().map_or(0.0, |(lo, hi)| (hi - lo).length());
+    let len = match arg.strip_suffix('%') {
+        Some(p) => p.trim().parse::<f64>().ok().map(|p| p / 100.0 * diag),
+        None => arg.trim().parse::<f64>().ok(),
+    };
+    match len {
+        Some(l) if l.is_finite() && l > 10.0 * eps => Ok(l),
+        _ => Err(cli::Failure::input(format!(
+            "error: --patch-length '{arg}' is not a length or percentage above 10 × epsilon ({eps:e})"
+        ))),
+    }
 }
 
 fn hemicube_res(s: &str) -> Result<u32, String> {
@@ -170,6 +197,27 @@ fn main() -> std::process::ExitCode {
         let t_read = t_start.elapsed();
         let rss_input = memory_kb("VmRSS");
         let eps = cli::epsilon(args.epsilon, &model);
+        let others = libmesh::not_patches(&model, eps);
+        if !others.is_empty() {
+            let len = patch_length(&args.patch_length, &model, eps)?;
+            if !c.quiet {
+                let (face, why) = &others[0];
+                eprintln!(
+                    "warning: {} face{} not patches (triangles or convex quadrilaterals; the first, {face}: {why}); meshed as `ugcut -l {len:.4}` would (run ugcut first to choose the patch size)",
+                    others.len(),
+                    if others.len() == 1 { " is" } else { "s are" },
+                );
+            }
+            let opts = libmesh::patch::Options {
+                len,
+                eps,
+                angle: 25.0,
+                quads: true,
+            };
+            let (cut, _) = libmesh::patch::cut(&model, opts)
+                .map_err(|e| cli::Failure::runtime(format!("error: {e}")))?;
+            model = cut;
+        }
         let mesh = libmesh::Mesh::from_model(&model, eps)
             .map_err(|e| cli::Failure::input(format!("error: {e}")))?;
         if !c.quiet {
@@ -290,6 +338,14 @@ fn main() -> std::process::ExitCode {
             });
         }
         let mut solver = radiosity::Solver::new(mesh, &model.materials, vis, opts);
+        if solver.emitted() <= 0.0 && !args.allow_dark {
+            return Err(cli::Failure::runtime(
+                "error: nothing in the model emits light: no face has a material with an emission. \
+                 Give the lights a material that emits, for example\n  \
+                 defmat lamp; diffuse_rgb 0.8 0.8 0.8; emission_rgb 10 10 10; end;\n\
+                 and name it on their faces; or pass --allow-dark to write the black model",
+            ));
+        }
         // The output needs only the input's names, colours, materials and
         // non-geometry statements: drop its geometry.
         model.items.retain(|it| {
@@ -334,7 +390,9 @@ fn main() -> std::process::ExitCode {
         if !c.quiet {
             match stop {
                 radiosity::Stop::Dark => {
-                    eprintln!("warning: nothing in the model emits light; every vertex is dark")
+                    eprintln!(
+                        "warning: nothing in the model emits light; every vertex is dark (--allow-dark)"
+                    )
                 }
                 radiosity::Stop::Interrupted => {
                     eprintln!("note: interrupted; writing the solution so far")

@@ -49,6 +49,10 @@ struct Args {
     /// Skip step 3 (joining coplanar faces).
     #[arg(long)]
     no_merge_faces: bool,
+    /// Do not repair faces whose contours cross or touch themselves, or are
+    /// narrower than epsilon somewhere (after step 2).
+    #[arg(long)]
+    no_repair: bool,
 }
 
 fn parse_angle(s: &str) -> Result<f64, String> {
@@ -69,11 +73,27 @@ fn main() -> std::process::ExitCode {
             merge_vertices: !args.no_merge_vertices,
             split_edges: !args.no_split_edges,
             merge_faces: !args.no_merge_faces,
+            repair: !args.no_repair,
         };
         let (out, st) = clean::group::vlmerge(model, &opts)?;
         if !c.quiet {
             for d in &st.dropped {
                 eprintln!("warning: face {}: {}; dropped", d.face, d.reason);
+            }
+            for f in st
+                .repaired
+                .iter()
+                .take(if c.verbose > 0 { usize::MAX } else { 10 })
+            {
+                eprintln!(
+                    "warning: face {f}: its contours cross or touch themselves, or it is narrower than epsilon somewhere; repaired"
+                );
+            }
+            if c.verbose == 0 && st.repaired.len() > 10 {
+                eprintln!(
+                    "warning: {} more faces repaired (-v lists them)",
+                    st.repaired.len() - 10
+                );
             }
         }
         let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;

@@ -772,20 +772,33 @@ pub enum PairKind {
 /// degenerate face, which takes part in no pair. In order of (i, j), the same
 /// at any thread count.
 pub fn classify_pairs(geoms: &[Option<FaceGeom>], eps: f64) -> Vec<(usize, usize, PairKind)> {
-    classify(geoms, eps, true)
+    classify(geoms, eps, Want::All)
+}
+
+/// The coplanar pairs only (overlapping, coincident, back to back: what
+/// `ugcopl` and `ugclean` act on); other pairs are not looked at.
+pub fn coplanar_pairs(geoms: &[Option<FaceGeom>], eps: f64) -> Vec<(usize, usize, PairKind)> {
+    classify(geoms, eps, Want::Coplanar)
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Want {
+    All,
+    Intersecting,
+    Coplanar,
 }
 
 /// The intersecting pairs only (what `ugisect` cuts): coplanar pairs are
 /// not measured.
 pub fn intersecting_pairs(geoms: &[Option<FaceGeom>], eps: f64) -> Vec<(usize, usize)> {
-    classify(geoms, eps, false)
+    classify(geoms, eps, Want::Intersecting)
         .into_iter()
         .filter(|p| p.2 == PairKind::Intersect)
         .map(|(i, j, _)| (i, j))
         .collect()
 }
 
-fn classify(geoms: &[Option<FaceGeom>], eps: f64, coplanar: bool) -> Vec<(usize, usize, PairKind)> {
+fn classify(geoms: &[Option<FaceGeom>], eps: f64, want: Want) -> Vec<(usize, usize, PairKind)> {
     let boxes: Vec<(DVec3, DVec3, u32)> = geoms
         .iter()
         .enumerate()
@@ -811,20 +824,58 @@ fn classify(geoms: &[Option<FaceGeom>], eps: f64, coplanar: bool) -> Vec<(usize,
                 let gb = geoms[j as usize]
                     .as_ref()
                     .expect("indexed faces have geometry");
-                let kind = match relate(ga, gb, eps) {
+                let rel = if want == Want::Coplanar {
+                    if geom::intersect::coplanar(ga, gb, eps) {
+                        Relation::Coplanar
+                    } else {
+                        Relation::Disjoint
+                    }
+                } else {
+                    relate(ga, gb, eps)
+                };
+                let kind = match rel {
                     Relation::Intersect => Some(PairKind::Intersect),
-                    Relation::Coplanar if !coplanar => None,
+                    Relation::Coplanar if want == Want::Intersecting => None,
                     Relation::Coplanar => {
-                        let a2: &[Vec<DVec2>] = &ga.contours_2d;
+                        // Only contours reaching the common box matter (one
+                        // outside it cannot surround any of it): a storey's
+                        // floor with hundreds of holes against a rug is the
+                        // rug's neighbourhood.
+                        let ((alo, ahi), (blo, bhi)) = (ga.bounds(), gb.bounds());
+                        let pad = DVec3::splat(4.0 * eps);
+                        let (wlo, whi) = (alo.max(blo) - pad, ahi.min(bhi) + pad);
+                        let near =
+                            |b: &(DVec3, DVec3)| b.0.cmple(whi).all() && b.1.cmpge(wlo).all();
+                        let mut dropped = false;
+                        let a2: Vec<Vec<DVec2>> = ga
+                            .contours_2d
+                            .iter()
+                            .zip(&ga.contour_boxes)
+                            .filter(|(_, b)| {
+                                near(b) || {
+                                    dropped = true;
+                                    false
+                                }
+                            })
+                            .map(|(c, _)| c.clone())
+                            .collect();
                         let b2: Vec<Vec<DVec2>> = gb
                             .contours
                             .iter()
-                            .map(|c| c.iter().map(|&p| ga.frame.to_2d(p)).collect())
+                            .zip(&gb.contour_boxes)
+                            .filter(|(_, b)| {
+                                near(b) || {
+                                    dropped = true;
+                                    false
+                                }
+                            })
+                            .map(|(c, _)| c.iter().map(|&p| ga.frame.to_2d(p)).collect())
                             .collect();
                         // Snap rounding at epsilon drops every sliver
                         // narrower than epsilon: what is left is a real
                         // overlap, however small.
-                        let (cov, clipped) = coverage_near(a2, &b2, eps);
+                        let (cov, clipped) = coverage_near(&a2, &b2, eps);
+                        let clipped = clipped || dropped;
                         let ov = cov.common;
                         let tol = eps * eps;
                         if ov > tol {

@@ -123,7 +123,7 @@ pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
             .map(|c| c.iter().map(|&v| m.pos(v)).collect())
             .collect()
     };
-    let pairs: Vec<(usize, usize)> = check::classify_pairs(&geoms, eps)
+    let pairs: Vec<(usize, usize)> = check::coplanar_pairs(&geoms, eps)
         .into_iter()
         .filter(|p| p.2 == PairKind::Coincident)
         .map(|(i, j, _)| (i, j))

@@ -40,7 +40,7 @@ pub struct Stats {
 /// Cuts the coplanar overlapping faces of a flat model.
 pub fn copl(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
     let (faces, geoms) = face_geoms(m);
-    let pairs: Vec<(usize, usize)> = check::classify_pairs(&geoms, eps)
+    let pairs: Vec<(usize, usize)> = check::coplanar_pairs(&geoms, eps)
         .into_iter()
         .filter(|p| matches!(p.2, PairKind::Overlap(_)))
         .map(|(i, j, _)| (i, j))
@@ -67,12 +67,31 @@ pub fn copl(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
             let g = geoms[k].as_ref()?;
             let mut layout = Layout::new(g.frame);
             layout.contours(&m.faces[faces[k].idx()].contours, Tag::Toggle(0), pos);
+            // A neighbour much bigger than this face (a storey's floor
+            // with hundreds of holes under a rug) is clipped to a box around
+            // this face first: only its part there can cut it.
+            let (lo, hi) = geom::index::bbox(
+                g.contours_2d.iter().flatten().map(|p| p.extend(0.0)),
+                4.0 * eps,
+            );
+            let (lo, hi) = (lo.truncate(), hi.truncate());
             for (t, &j) in others[k].iter().enumerate() {
-                layout.contours(
-                    &m.faces[faces[j].idx()].contours,
-                    Tag::Toggle(t as u32 + 1),
-                    pos,
-                );
+                let tag = Tag::Toggle(t as u32 + 1);
+                let cs = &m.faces[faces[j].idx()].contours;
+                for c in cs {
+                    let ring: Vec<(geom::DVec2, Option<ug::VertexId>)> = c
+                        .iter()
+                        .map(|&v| (g.frame.to_2d(pos(v)), Some(v)))
+                        .collect();
+                    if ring
+                        .iter()
+                        .all(|p| p.0.cmpge(lo).all() && p.0.cmple(hi).all())
+                    {
+                        layout.contours(std::slice::from_ref(c), tag, pos);
+                    } else {
+                        layout.ring(&winged::pieces::clip_ring(&ring, lo, hi), tag);
+                    }
+                }
             }
             let arr = layout.arrange(eps, false);
             let pieces: Vec<Vec<Vec<Point>>> = arr

@@ -46,6 +46,10 @@ pub struct Options {
     pub merge_vertices: bool,
     pub split_edges: bool,
     pub merge_faces: bool,
+    /// Make every face sound in its plane after the vertex steps (see
+    /// [`winged::pieces::settle`]): a contour that crosses or touches
+    /// itself, or is narrower than epsilon somewhere, is repaired.
+    pub repair: bool,
 }
 
 impl Options {
@@ -57,6 +61,7 @@ impl Options {
             merge_vertices: true,
             split_edges: true,
             merge_faces: true,
+            repair: true,
         }
     }
 }
@@ -80,6 +85,8 @@ pub struct Stats {
     pub dropped: Vec<Dropped>,
     /// Vertices inserted into edges (T-vertices removed).
     pub tvertices: usize,
+    /// Faces whose contours crossed or touched themselves, repaired.
+    pub repaired: Vec<String>,
     /// Edges split (an edge with several T-vertices counts once per pass).
     pub edges_split: usize,
     /// Faces joined into an earlier face (and so removed).
@@ -143,6 +150,22 @@ pub fn vlmerge(model: Model, opts: &Options) -> Result<(Model, Stats), ug::Diagn
         let s = split_edges(&mut mesh, opts.eps);
         st.tvertices = s.inserted;
         st.edges_split = s.edges;
+    }
+    if opts.repair {
+        let mut settled = winged::pieces::Settled::default();
+        winged::pieces::repair_all(
+            &mut mesh,
+            opts.eps,
+            &winged::pieces::Layout::frame_of,
+            &|_| false,
+            &mut settled,
+        );
+        st.tvertices += settled.tvertices;
+        st.repaired = settled.repaired.iter().map(|&f| label(f)).collect();
+        st.dropped.extend(settled.removed.iter().map(|&f| Dropped {
+            face: label(f),
+            reason: "no area left once its contours were made sound".to_string(),
+        }));
     }
     st.times[1] = t.elapsed();
 

@@ -34,6 +34,9 @@ use winged::pieces::{Layout, Point};
 
 use crate::pieces::{Rebuild, face_geoms};
 
+/// A face's pieces: contours of points.
+type Pieces = Vec<Vec<Vec<Point>>>;
+
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Stats {
     pub pairs: usize,
@@ -76,7 +79,7 @@ pub fn isect(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
         stats.new_vertices += st.new_vertices;
         stats.tvertices += st.tvertices;
         stats.extensions += st.extensions;
-        stats.pieces = stats.pieces + st.pieces;
+        stats.pieces += st.pieces;
         stats.rounds = rounds;
         out = next;
     }
@@ -126,7 +129,7 @@ fn isect_once(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
         .filter(|&k| !by_face[k].is_empty())
         .collect();
     let pos = |v: VertexId| rb.out.vertices[v.idx()].pos;
-    let results: Vec<(usize, Vec<Vec<Vec<Point>>>, usize)> = work
+    let results: Vec<(usize, Pieces, usize)> = work
         .par_iter()
         .filter_map(|&k| {
             let face = &m.faces[faces[k].idx()];

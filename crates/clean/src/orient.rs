@@ -452,23 +452,6 @@ fn automatic(
             )
         })
         .collect();
-    if let Ok(dbg) = std::env::var("UGFLIP_DEBUG") {
-        for (c, members) in comps.iter().enumerate() {
-            let names: Vec<String> = members
-                .iter()
-                .map(|&f| mesh.face(f).name.clone().unwrap_or_default())
-                .collect();
-            if names.iter().any(|n| n.starts_with(&dbg)) {
-                eprintln!(
-                    "DEBUG comp {c}: {:?} rel {:?} -> {:?}",
-                    names,
-                    members.iter().map(|f| rel[f.idx()]).collect::<Vec<_>>(),
-                    decisions[c]
-                );
-            }
-        }
-    }
-
     let mut ambiguous = Vec::new();
     let mut flipped = Vec::new();
     for (c, members) in comps.iter().enumerate() {
@@ -658,7 +641,6 @@ fn encloses(
     }
     let mut objects: Vec<usize> = by_object.keys().copied().collect();
     objects.sort_unstable();
-    let mut probes: Vec<Vec<DVec3>> = Vec::new();
     for o in objects {
         let faces = &by_object[&o];
         if !faces.iter().all(|s| in_box(s.p)) {
@@ -671,21 +653,14 @@ fn encloses(
             .map(|s| s.area)
             .sum();
         if total > 0.0 && within > 0.5 * total {
-            probes.push(vec![faces[0].p]);
-            break;
+            return true;
         }
     }
-    let mut extra: Vec<Vec<DVec3>> = opts.viewpoints.iter().map(|&p| vec![p]).collect();
-    extra.extend(opts.bombs.iter().map(|&p| vec![p]));
-    if !probes.is_empty() {
-        return true;
-    }
-    let probes = extra;
-    let r = probes.iter().position(|ps| ps.iter().all(|&p| inside(p)));
-    if std::env::var("UGFLIP_DEBUG").is_ok() && r.is_some() {
-        eprintln!("DEBUG comp {c} encloses probe {:?}", probes[r.unwrap()]);
-    }
-    r.is_some()
+    // Or a viewpoint (camera eye, explicit point) inside it.
+    opts.viewpoints
+        .iter()
+        .chain(opts.bombs.iter())
+        .any(|&p| inside(p))
 }
 
 /// Eye points of `cam` statements written `cam NAME … -eye X Y Z …`.

@@ -417,7 +417,7 @@ fn dedup(mut edges: Vec<(u32, u32, Tags)>) -> Vec<(u32, u32, Tags)> {
             std::mem::swap(&mut e.0, &mut e.1);
         }
     }
-    edges.sort_by(|x, y| (x.0, x.1).cmp(&(y.0, y.1)));
+    edges.sort_by_key(|x| (x.0, x.1));
     let mut out: Vec<(u32, u32, Tags)> = Vec::with_capacity(edges.len());
     for e in edges {
         match out.last_mut() {
@@ -427,6 +427,40 @@ fn dedup(mut edges: Vec<(u32, u32, Tags)>) -> Vec<(u32, u32, Tags)> {
     }
     out.retain(|e| !e.2.is_void());
     out
+}
+
+/// Queries along a long diagonal segment are made in pieces no longer than
+/// this (1/64 of the points' extent), so that it does not collect half the
+/// arrangement.
+fn query_step(pts: &[DVec2]) -> f64 {
+    let mut lo = DVec2::splat(f64::INFINITY);
+    let mut hi = DVec2::splat(f64::NEG_INFINITY);
+    for p in pts {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    let d = (hi - lo).length();
+    if d > 0.0 { d / 64.0 } else { f64::INFINITY }
+}
+
+/// Ids of the boxes near the segment [a, b] (grown by `pad`), ascending.
+fn along(index: &Boxes, a: DVec2, b: DVec2, pad: f64, step: f64) -> Vec<u32> {
+    let ext = (b - a).abs();
+    if ext.x.min(ext.y) <= step {
+        let (lo, hi) = seg_box(a, b, pad);
+        return index.query(lo, hi);
+    }
+    let pieces = ((ext.x.max(ext.y) / step).ceil() as usize).clamp(2, 256);
+    let mut ids = Vec::new();
+    for k in 0..pieces {
+        let p = a.lerp(b, k as f64 / pieces as f64);
+        let q = a.lerp(b, (k + 1) as f64 / pieces as f64);
+        let (lo, hi) = seg_box(p, q, pad);
+        ids.extend(index.query(lo, hi));
+    }
+    ids.sort_unstable();
+    ids.dedup();
+    ids
 }
 
 /// One round: new hot points at crossings, then every edge through the hot
@@ -442,10 +476,10 @@ fn snap_round(hot: &mut Hot, edges: &[(u32, u32, Tags)], r: f64) -> (Vec<(u32, u
             (lo, hi, k as u32)
         }));
         let mut found: Vec<DVec2> = Vec::new();
+        let step = query_step(&hot.pts);
         for (i, e) in edges.iter().enumerate() {
             let (a, b) = pts(hot, e);
-            let (lo, hi) = seg_box(a, b, 0.0);
-            for j in index.query(lo, hi) {
+            for j in along(&index, a, b, 0.0, step) {
                 let j = j as usize;
                 if j <= i {
                     continue;
@@ -467,16 +501,22 @@ fn snap_round(hot: &mut Hot, edges: &[(u32, u32, Tags)], r: f64) -> (Vec<(u32, u
         }
     }
     // Rerouting through hot points within r.
-    let index = Boxes::new(hot.pts.iter().enumerate().map(|(k, p)| {
-        let q = p.extend(0.0);
-        (q, q, k as u32)
-    }));
+    let index = Boxes::new(
+        hot.pts
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| hot.real[*k])
+            .map(|(k, p)| {
+                let q = p.extend(0.0);
+                (q, q, k as u32)
+            }),
+    );
+    let step = query_step(&hot.pts);
     let mut out: Vec<(u32, u32, Tags)> = Vec::with_capacity(edges.len());
     for e in edges {
         let (a, b) = pts(hot, e);
-        let (lo, hi) = seg_box(a, b, r);
         let mut on: Vec<(f64, u32)> = Vec::new();
-        for k in index.query(lo, hi) {
+        for k in along(&index, a, b, r, step) {
             if k == e.0 || k == e.1 {
                 continue;
             }
@@ -515,16 +555,18 @@ fn snap_round(hot: &mut Hot, edges: &[(u32, u32, Tags)], r: f64) -> (Vec<(u32, u
 /// Half-edge structure over the final edges: half-edge 2k goes a→b of edge
 /// k, 2k+1 goes b→a.
 struct Graph {
-    /// Outgoing half-edges per point, counter-clockwise by angle.
-    out: FxHashMap<u32, Vec<u32>>,
-    /// Position of each half-edge in its origin's `out` list.
+    /// Outgoing half-edges of point v, counter-clockwise by angle:
+    /// `list[start[v]..start[v + 1]]`.
+    start: Vec<u32>,
+    list: Vec<u32>,
+    /// Position of each half-edge in its origin's list.
     slot: Vec<u32>,
 }
 
 impl Graph {
     fn origin(edges: &[(u32, u32, Tags)], h: u32) -> u32 {
         let e = &edges[(h / 2) as usize];
-        if h % 2 == 0 { e.0 } else { e.1 }
+        if h.is_multiple_of(2) { e.0 } else { e.1 }
     }
 
     fn dest(edges: &[(u32, u32, Tags)], h: u32) -> u32 {
@@ -532,34 +574,49 @@ impl Graph {
     }
 
     fn build(pts: &[DVec2], edges: &[(u32, u32, Tags)]) -> Graph {
-        let mut out: FxHashMap<u32, Vec<u32>> = FxHashMap::default();
+        let n = pts.len();
+        let mut start = vec![0u32; n + 1];
         for h in 0..(2 * edges.len()) as u32 {
-            out.entry(Graph::origin(edges, h)).or_default().push(h);
+            start[Graph::origin(edges, h) as usize + 1] += 1;
+        }
+        for v in 0..n {
+            start[v + 1] += start[v];
+        }
+        let mut fill = start.clone();
+        let mut list = vec![0u32; 2 * edges.len()];
+        for h in 0..(2 * edges.len()) as u32 {
+            let v = Graph::origin(edges, h) as usize;
+            list[fill[v] as usize] = h;
+            fill[v] += 1;
         }
         let mut slot = vec![0u32; 2 * edges.len()];
-        let mut keys: Vec<u32> = out.keys().copied().collect();
-        keys.sort_unstable();
-        for v in keys {
-            let list = out.get_mut(&v).expect("key");
-            let o = pts[v as usize];
-            list.sort_by(|&x, &y| {
-                let a = pts[Graph::dest(edges, x) as usize];
-                let b = pts[Graph::dest(edges, y) as usize];
-                angle_cmp(o, a, b).then(x.cmp(&y))
-            });
-            for (i, &h) in list.iter().enumerate() {
-                slot[h as usize] = i as u32;
+        for v in 0..n {
+            let (a, b) = (start[v] as usize, start[v + 1] as usize);
+            if b - a > 1 {
+                let o = pts[v];
+                list[a..b].sort_by(|&x, &y| {
+                    let p = pts[Graph::dest(edges, x) as usize];
+                    let q = pts[Graph::dest(edges, y) as usize];
+                    angle_cmp(o, p, q).then(x.cmp(&y))
+                });
+            }
+            for i in a..b {
+                slot[list[i] as usize] = (i - a) as u32;
             }
         }
-        Graph { out, slot }
+        Graph { start, list, slot }
+    }
+
+    fn degree(&self, v: u32) -> usize {
+        (self.start[v as usize + 1] - self.start[v as usize]) as usize
     }
 
     /// The half-edge after `h` on its face (the face on the left): at h's
     /// destination, the outgoing half-edge just clockwise of h's twin.
     fn next(&self, edges: &[(u32, u32, Tags)], h: u32) -> u32 {
         let t = h ^ 1;
-        let v = Graph::origin(edges, t);
-        let list = &self.out[&v];
+        let v = Graph::origin(edges, t) as usize;
+        let list = &self.list[self.start[v] as usize..self.start[v + 1] as usize];
         let i = self.slot[t as usize] as usize;
         list[(i + list.len() - 1) % list.len()]
     }
@@ -745,55 +802,82 @@ impl Graph {
         }
         let (cycles, cyc) = self.cycles(edges);
         let face = self.assign(pts, edges, &cycles, &cyc);
-        // Face of each half-edge.
-        let fof = |h: u32| face[cyc[h as usize] as usize];
+        // Face of each half-edge (faces are numbered by their
+        // counter-clockwise cycle; `nc` is the unbounded face).
+        let nc = cycles.len() as u32;
+        let fof = |h: u32| {
+            let f = face[cyc[h as usize] as usize];
+            if f == u32::MAX { nc } else { f }
+        };
         // Labels: breadth-first from the unbounded face.
-        let mut label: FxHashMap<u32, Vec<u32>> = FxHashMap::default();
-        let mut adj: FxHashMap<u32, Vec<(u32, u32)>> = FxHashMap::default();
+        let mut adj: Vec<Vec<(u32, u32)>> = vec![Vec::new(); cycles.len() + 1];
         for (k, _) in edges.iter().enumerate() {
             let (f0, f1) = (fof(2 * k as u32), fof(2 * k as u32 + 1));
             if f0 != f1 {
-                adj.entry(f0).or_default().push((f1, k as u32));
-                adj.entry(f1).or_default().push((f0, k as u32));
+                adj[f0 as usize].push((f1, k as u32));
+                adj[f1 as usize].push((f0, k as u32));
             }
         }
-        label.insert(u32::MAX, Vec::new());
-        let mut queue = std::collections::VecDeque::from([u32::MAX]);
+        let mut label: Vec<Option<Vec<u32>>> = vec![None; cycles.len() + 1];
+        label[nc as usize] = Some(Vec::new());
+        let mut queue = std::collections::VecDeque::from([nc]);
         while let Some(f) = queue.pop_front() {
-            let here = label[&f].clone();
-            if let Some(list) = adj.get(&f) {
-                let mut list = list.clone();
-                list.sort_unstable();
-                for (g, e) in list {
-                    if label.contains_key(&g) {
-                        continue;
-                    }
-                    let mut t = Tags {
-                        toggles: here.clone(),
-                        cut: false,
-                    };
-                    t.add(&edges[e as usize].2);
-                    label.insert(g, t.toggles);
-                    queue.push_back(g);
+            let here = label[f as usize].clone().unwrap_or_default();
+            let mut list = std::mem::take(&mut adj[f as usize]);
+            list.sort_unstable();
+            for (g, e) in list {
+                if label[g as usize].is_some() {
+                    continue;
                 }
+                let mut t = Tags {
+                    toggles: here.clone(),
+                    cut: false,
+                };
+                t.add(&edges[e as usize].2);
+                label[g as usize] = Some(t.toggles);
+                queue.push_back(g);
             }
         }
         // Loops of each bounded face: its half-edges, less those whose twin
         // is on the same face (a cut that separates nothing), traced again.
-        let mut by_face: FxHashMap<u32, Vec<u32>> = FxHashMap::default();
-        for h in 0..(2 * edges.len()) as u32 {
-            let f = fof(h);
-            if f == u32::MAX || f == fof(h ^ 1) {
+        // Cycles of each face, and whether it has half-edges whose twin is
+        // on the same face (then its loops are traced again without them).
+        let mut face_cycles: Vec<Vec<u32>> = vec![Vec::new(); cycles.len() + 1];
+        let mut bridged = vec![false; cycles.len() + 1];
+        for (k, c) in cycles.iter().enumerate() {
+            let f = fof(c[0]);
+            if f == nc {
                 continue;
             }
-            by_face.entry(f).or_default().push(h);
+            face_cycles[f as usize].push(k as u32);
+            if c.iter().any(|&h| fof(h ^ 1) == f) {
+                bridged[f as usize] = true;
+            }
         }
-        let mut ids: Vec<u32> = by_face.keys().copied().collect();
-        ids.sort_unstable();
         let mut out = Vec::new();
-        for f in ids {
-            let hs = &by_face[&f];
-            let loops = trace(pts, edges, hs);
+        for f in 0..cycles.len() {
+            if face_cycles[f].is_empty() {
+                continue;
+            }
+            let loops = if bridged[f] {
+                let hs: Vec<u32> = face_cycles[f]
+                    .iter()
+                    .flat_map(|&k| cycles[k as usize].iter().copied())
+                    .filter(|&h| fof(h ^ 1) != f as u32)
+                    .collect();
+                trace(pts, edges, &hs)
+            } else {
+                let mut loops = Vec::new();
+                for &k in &face_cycles[f] {
+                    let seq: Vec<u32> = cycles[k as usize]
+                        .iter()
+                        .map(|&h| Graph::origin(edges, h))
+                        .collect();
+                    split_repeats(seq, &mut loops);
+                }
+                order_loops(pts, &mut loops);
+                loops
+            };
             if loops.is_empty() {
                 continue;
             }
@@ -810,7 +894,7 @@ impl Graph {
             }
             out.push(Face {
                 loops,
-                label: label.get(&f).cloned().unwrap_or_default(),
+                label: label[f].clone().unwrap_or_default(),
                 area,
             });
         }
@@ -824,7 +908,7 @@ impl Graph {
         let (cycles, cyc) = self.cycles(edges);
         let face = self.assign(pts, edges, &cycles, &cyc);
         let fof = |h: u32| face[cyc[h as usize] as usize];
-        let deg = |v: u32| self.out.get(&v).map_or(0, Vec::len);
+        let deg = |v: u32| self.degree(v);
         let mut bridge = None;
         for (k, e) in edges.iter().enumerate() {
             if !e.2.cut || !e.2.toggles.is_empty() {
@@ -977,7 +1061,13 @@ fn trace(pts: &[DVec2], edges: &[(u32, u32, Tags)], hs: &[u32]) -> Vec<Vec<u32>>
         // Split where the loop revisits a point.
         split_repeats(seq, &mut loops);
     }
-    // Outer loop (largest positive area) first, then the others in order.
+    order_loops(pts, &mut loops);
+    loops
+}
+
+/// Drops loops without area and puts the outer loop (the largest positive
+/// area) first, the others keeping their order.
+fn order_loops(pts: &[DVec2], loops: &mut Vec<Vec<u32>>) {
     let area = |l: &Vec<u32>| {
         crate::polygon::signed_area_2d(&l.iter().map(|&v| pts[v as usize]).collect::<Vec<_>>())
     };
@@ -991,7 +1081,6 @@ fn trace(pts: &[DVec2], edges: &[(u32, u32, Tags)], hs: &[u32]) -> Vec<Vec<u32>>
         let outer = loops.remove(k);
         loops.insert(0, outer);
     }
-    loops
 }
 
 /// Whether, turning clockwise around `o` from the direction of `back`,

@@ -18,6 +18,8 @@ pub struct FaceGeom {
     pub plane: Plane,
     pub frame: Frame,
     pub contours_2d: Vec<Vec<DVec2>>,
+    /// The bounding box of each contour.
+    pub contour_boxes: Vec<(DVec3, DVec3)>,
     edges: Option<std::sync::Arc<EdgeIndex>>,
 }
 
@@ -65,11 +67,16 @@ impl FaceGeom {
                 ids,
             })
         });
+        let contour_boxes = contours
+            .iter()
+            .map(|c| crate::index::bbox(c.iter().copied(), 0.0))
+            .collect();
         Some(FaceGeom {
             contours,
             plane,
             frame,
             contours_2d,
+            contour_boxes,
             edges,
         })
     }
@@ -173,12 +180,15 @@ fn snap(d: f64, eps: f64) -> f64 {
 /// happens only at distances up to about epsilon, so twice that covers it.
 pub const COPLANAR_EPSILONS: f64 = 2.0;
 
-/// Whether the planes are nearly parallel (within about 0.8°) and all of
-/// one face's vertices lie within `COPLANAR_EPSILONS × eps` of the other's
-/// plane. (Without the angle, a strip a few epsilons wide standing on a
-/// face would count as lying in it.)
+/// Whether all of one face's vertices lie within `COPLANAR_EPSILONS × eps`
+/// of the other's plane, the planes within about 25° of parallel. The angle
+/// rules out only a strip a few epsilons wide standing across a face (its
+/// vertices are all near the plane too, but it projects to nothing). It is
+/// loose on purpose: a face only a few epsilons wide, with its vertices
+/// jittered by a fraction of epsilon, has a normal tilted by degrees, and
+/// it still lies in the plane within tolerance.
 pub fn coplanar(a: &FaceGeom, b: &FaceGeom, eps: f64) -> bool {
-    if a.plane.n.dot(b.plane.n).abs() < 0.9999 {
+    if a.plane.n.dot(b.plane.n).abs() < 0.9 {
         return false;
     }
     let tol = COPLANAR_EPSILONS * eps;
@@ -195,58 +205,11 @@ const POINT_CUTS: bool = false;
 
 /// Classifies the pair (a, b) with distance tolerance `eps`.
 pub fn relate(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Relation {
-    let da: Vec<Vec<f64>> = a
-        .contours
-        .iter()
-        .map(|c| c.iter().map(|&p| snap(b.plane.dist(p), eps)).collect())
-        .collect();
-    let db: Vec<Vec<f64>> = b
-        .contours
-        .iter()
-        .map(|c| c.iter().map(|&p| snap(a.plane.dist(p), eps)).collect())
-        .collect();
-    let all = |d: &Vec<Vec<f64>>, f: &dyn Fn(f64) -> bool| d.iter().flatten().all(|&x| f(x));
-    if coplanar(a, b, eps) {
-        return Relation::Coplanar;
-    }
-    if all(&db, &|x| x > 0.0)
-        || all(&db, &|x| x < 0.0)
-        || all(&da, &|x| x > 0.0)
-        || all(&da, &|x| x < 0.0)
-    {
-        return Relation::Disjoint;
-    }
-    let (n1, n2) = (a.plane.n, b.plane.n);
-    let u = n1.cross(n2);
-    let uu = u.length_squared();
-    if uu < 1e-24 {
-        return Relation::Disjoint; // parallel planes that are not within eps
-    }
-    let p0 = (n2.cross(u) * a.plane.d + u.cross(n1) * b.plane.d) / uu;
-    let dir = u / uu.sqrt();
-    let mut ts: Vec<f64> = Vec::new();
-    let mut collect = |contours: &[Vec<DVec3>], d: &[Vec<f64>]| {
-        for (c, dc) in contours.iter().zip(d) {
-            let n = c.len();
-            for i in 0..n {
-                let j = (i + 1) % n;
-                let (p, q, dp, dq) = (c[i], c[j], dc[i], dc[j]);
-                if dp == 0.0 {
-                    ts.push((p - p0).dot(dir));
-                } else if dp * dq < 0.0 {
-                    let x = p + (q - p) * (dp / (dp - dq));
-                    ts.push((x - p0).dot(dir));
-                }
-            }
-        }
+    let (p0, dir, ts) = match line_of(a, b, eps) {
+        LineCase::Coplanar => return Relation::Coplanar,
+        LineCase::Disjoint => return Relation::Disjoint,
+        LineCase::Line { p0, dir, ts } => (p0, dir, ts),
     };
-    collect(&a.contours, &da);
-    collect(&b.contours, &db);
-    if ts.is_empty() {
-        return Relation::Disjoint;
-    }
-    ts.sort_by(f64::total_cmp);
-    ts.dedup_by(|x, y| (*x - *y).abs() <= eps);
     let mut samples = Vec::with_capacity(ts.len() * 2);
     for (k, &t) in ts.iter().enumerate() {
         samples.push(t);
@@ -275,6 +238,131 @@ pub fn relate(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Relation {
     }
 }
 
+/// The line where two faces' planes meet, and the parameters along it where
+/// either face's boundary meets the other's plane (sorted, merged within
+/// eps): where the line can enter or leave the faces.
+enum LineCase {
+    Coplanar,
+    Disjoint,
+    Line { p0: DVec3, dir: DVec3, ts: Vec<f64> },
+}
+
+impl FaceGeom {
+    /// The edges (contour, index) that may reach the 3-D box [lo, hi]:
+    /// every edge of a small face, the indexed ones near the box's
+    /// projection for a big one.
+    fn edges_near(&self, lo: DVec3, hi: DVec3) -> Vec<(u32, u32)> {
+        match &self.edges {
+            None => self
+                .contours
+                .iter()
+                .enumerate()
+                .flat_map(|(ci, c)| (0..c.len()).map(move |i| (ci as u32, i as u32)))
+                .collect(),
+            Some(ix) => {
+                let mut l2 = DVec2::splat(f64::INFINITY);
+                let mut h2 = DVec2::splat(f64::NEG_INFINITY);
+                for k in 0..8 {
+                    let c = DVec3::new(
+                        if k & 1 == 0 { lo.x } else { hi.x },
+                        if k & 2 == 0 { lo.y } else { hi.y },
+                        if k & 4 == 0 { lo.z } else { hi.z },
+                    );
+                    let q = self.frame.to_2d(c);
+                    l2 = l2.min(q);
+                    h2 = h2.max(q);
+                }
+                ix.tree
+                    .query(l2.extend(0.0), h2.extend(0.0))
+                    .into_iter()
+                    .map(|k| ix.ids[k as usize])
+                    .collect()
+            }
+        }
+    }
+
+    pub fn bounds(&self) -> (DVec3, DVec3) {
+        crate::index::bbox(self.contours.iter().flatten().copied(), 0.0)
+    }
+}
+
+fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
+    if coplanar(a, b, eps) {
+        return LineCase::Coplanar;
+    }
+    // Only what lies in both bounding boxes can matter: every stretch of
+    // the line inside both faces begins and ends at a boundary crossing
+    // inside both boxes.
+    let (alo, ahi) = a.bounds();
+    let (blo, bhi) = b.bounds();
+    let pad = DVec3::splat(2.0 * eps);
+    let (lo, hi) = (alo.max(blo) - pad, ahi.min(bhi) + pad);
+    if lo.cmpgt(hi).any() {
+        return LineCase::Disjoint;
+    }
+    let ea = a.edges_near(lo, hi);
+    let eb = b.edges_near(lo, hi);
+    // A face all on one side of the other's plane (decided on the whole
+    // face, so only for faces whose edges are all at hand).
+    let one_side = |g: &FaceGeom, other: &FaceGeom, edges: &[(u32, u32)]| {
+        let total: usize = g.contours.iter().map(Vec::len).sum();
+        if edges.len() != total {
+            return false;
+        }
+        let d = g
+            .contours
+            .iter()
+            .flatten()
+            .map(|&p| snap(other.plane.dist(p), eps));
+        let (mut pos, mut neg, mut zero) = (false, false, false);
+        for x in d {
+            if x > 0.0 {
+                pos = true;
+            } else if x < 0.0 {
+                neg = true;
+            } else {
+                zero = true;
+            }
+        }
+        !zero && (pos != neg)
+    };
+    if one_side(b, a, &eb) || one_side(a, b, &ea) {
+        return LineCase::Disjoint;
+    }
+    let (n1, n2) = (a.plane.n, b.plane.n);
+    let u = n1.cross(n2);
+    let uu = u.length_squared();
+    if uu < 1e-24 {
+        return LineCase::Disjoint; // parallel planes that are not within eps
+    }
+    let p0 = (n2.cross(u) * a.plane.d + u.cross(n1) * b.plane.d) / uu;
+    let dir = u / uu.sqrt();
+    let mut ts: Vec<f64> = Vec::new();
+    for (g, other, edges) in [(a, b, &ea), (b, a, &eb)] {
+        for &(ci, i) in edges {
+            let c = &g.contours[ci as usize];
+            let j = (i as usize + 1) % c.len();
+            let (p, q) = (c[i as usize], c[j]);
+            let (dp, dq) = (
+                snap(other.plane.dist(p), eps),
+                snap(other.plane.dist(q), eps),
+            );
+            if dp == 0.0 {
+                ts.push((p - p0).dot(dir));
+            } else if dp * dq < 0.0 {
+                let x = p + (q - p) * (dp / (dp - dq));
+                ts.push((x - p0).dot(dir));
+            }
+        }
+    }
+    if ts.is_empty() {
+        return LineCase::Disjoint;
+    }
+    ts.sort_by(f64::total_cmp);
+    ts.dedup_by(|x, y| (*x - *y).abs() <= eps);
+    LineCase::Line { p0, dir, ts }
+}
+
 /// Where two faces that are not coplanar cut each other: the segments of
 /// the line where their planes meet that lie in both (closed) faces and in
 /// the interior of at least one, in 3-D, ordered along the line. Where a
@@ -283,51 +371,10 @@ pub fn relate(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Relation {
 /// face), a cut of 4 `eps` along the line through the point stands for it.
 /// Empty for disjoint, touching or coplanar faces.
 pub fn cut_segments(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Vec<(DVec3, DVec3)> {
-    let side = |g: &FaceGeom, other: &FaceGeom| -> Vec<Vec<f64>> {
-        g.contours
-            .iter()
-            .map(|c| c.iter().map(|&p| snap(other.plane.dist(p), eps)).collect())
-            .collect()
+    let (p0, dir, ts) = match line_of(a, b, eps) {
+        LineCase::Line { p0, dir, ts } => (p0, dir, ts),
+        _ => return Vec::new(),
     };
-    let da = side(a, b);
-    let db = side(b, a);
-    let all = |d: &Vec<Vec<f64>>, f: &dyn Fn(f64) -> bool| d.iter().flatten().all(|&x| f(x));
-    if coplanar(a, b, eps) {
-        return Vec::new();
-    }
-    if all(&db, &|x| x > 0.0)
-        || all(&db, &|x| x < 0.0)
-        || all(&da, &|x| x > 0.0)
-        || all(&da, &|x| x < 0.0)
-    {
-        return Vec::new();
-    }
-    let (n1, n2) = (a.plane.n, b.plane.n);
-    let u = n1.cross(n2);
-    let uu = u.length_squared();
-    if uu < 1e-24 {
-        return Vec::new();
-    }
-    let p0 = (n2.cross(u) * a.plane.d + u.cross(n1) * b.plane.d) / uu;
-    let dir = u / uu.sqrt();
-    let mut ts: Vec<f64> = Vec::new();
-    for (g, d) in [(a, &da), (b, &db)] {
-        for (c, dc) in g.contours.iter().zip(d) {
-            let n = c.len();
-            for i in 0..n {
-                let j = (i + 1) % n;
-                let (p, q, dp, dq) = (c[i], c[j], dc[i], dc[j]);
-                if dp == 0.0 {
-                    ts.push((p - p0).dot(dir));
-                } else if dp * dq < 0.0 {
-                    let x = p + (q - p) * (dp / (dp - dq));
-                    ts.push((x - p0).dot(dir));
-                }
-            }
-        }
-    }
-    ts.sort_by(f64::total_cmp);
-    ts.dedup_by(|x, y| (*x - *y).abs() <= eps);
     let mut out: Vec<(f64, f64)> = Vec::new();
     let meets = |t: f64| {
         let s = p0 + dir * t;

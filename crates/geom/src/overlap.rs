@@ -83,7 +83,8 @@ pub fn coverage_near(a: &[Vec<DVec2>], b: &[Vec<DVec2>], snap: f64) -> (Coverage
     let (alo, ahi) = bounds(a);
     let (blo, bhi) = bounds(b);
     let pad = DVec2::splat(4.0 * snap);
-    let (lo, hi) = (alo.max(blo) - pad, ahi.min(bhi) + pad);
+    let (ilo, ihi) = (alo.max(blo), ahi.min(bhi));
+    let (lo, hi) = (ilo - pad, ihi + pad);
     let empty = Coverage {
         a: 0.0,
         b: 0.0,
@@ -91,7 +92,9 @@ pub fn coverage_near(a: &[Vec<DVec2>], b: &[Vec<DVec2>], snap: f64) -> (Coverage
         only_a: 0.0,
         only_b: 0.0,
     };
-    if lo.x >= hi.x || lo.y >= hi.y {
+    // Boxes that meet in a strip no wider than snap: what they share is
+    // narrower than snap, which the arrangement would drop.
+    if ihi.x - ilo.x <= snap || ihi.y - ilo.y <= snap {
         return (empty, true);
     }
     let inside = |l: DVec2, h: DVec2| l.cmpge(lo).all() && h.cmple(hi).all();
@@ -107,8 +110,9 @@ pub fn coverage_near(a: &[Vec<DVec2>], b: &[Vec<DVec2>], snap: f64) -> (Coverage
     (coverage(&a2, &b2, snap), !(ca && cb))
 }
 
-/// A closed contour clipped to the box [lo, hi] (Sutherland–Hodgman).
-fn clip_to_box(c: &[DVec2], lo: DVec2, hi: DVec2) -> Vec<DVec2> {
+/// A closed contour clipped to the box [lo, hi] (Sutherland–Hodgman): the
+/// even-odd region inside the box is kept; a contour outside it is empty.
+pub fn clip_to_box(c: &[DVec2], lo: DVec2, hi: DVec2) -> Vec<DVec2> {
     let mut pts: Vec<DVec2> = c.to_vec();
     // (axis, bound, keep values >= bound?)
     for (axis, bound, keep_above) in [
@@ -208,7 +212,7 @@ mod tests {
             (sq(3.0, 3.0, 1.0), 0.0),
             (sq(50.0, 50.0, 2.0), 4.0),
         ] {
-            let (c, clipped) = coverage_near(&big, &[small.clone()], 1e-9);
+            let (c, clipped) = coverage_near(&big, std::slice::from_ref(&small), 1e-9);
             assert!(clipped);
             assert!((c.common - want).abs() < 1e-9, "{c:?}");
             assert!((c.common - coverage(&big, &[small], 1e-9).common).abs() < 1e-9);

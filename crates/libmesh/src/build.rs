@@ -38,6 +38,65 @@ impl fmt::Display for BuildError {
 
 impl std::error::Error for BuildError {}
 
+/// Why `face` cannot be a patch by its shape alone (contours, corner count,
+/// coordinates), or None.
+fn shape_problem(m: &Model, face: &ug::Face) -> Option<String> {
+    if face.contours.len() != 1 {
+        return Some(format!(
+            "{} contours (holes or islands)",
+            face.contours.len()
+        ));
+    }
+    let c = &face.contours[0];
+    if c.len() != 3 && c.len() != 4 {
+        return Some(format!("{} vertices", c.len()));
+    }
+    if !c.iter().all(|&v| m.pos(v).is_finite()) {
+        return Some("non-finite coordinates".into());
+    }
+    None
+}
+
+/// Why the quadrilateral `pts` is not a patch (not planar within `eps`, or
+/// not strictly convex), or None (also for a triangle or no area).
+fn quad_problem(pts: &[DVec3], eps: f64) -> Option<&'static str> {
+    if pts.len() != 4 {
+        return None;
+    }
+    let unit = geom::newell_normal(pts).normalize_or_zero();
+    if unit == DVec3::ZERO {
+        return None;
+    }
+    let centroid = pts.iter().copied().sum::<DVec3>() / 4.0;
+    if pts.iter().any(|&p| (p - centroid).dot(unit).abs() > eps) {
+        return Some("quadrilateral is not planar");
+    }
+    let convex = (0..4).all(|i| {
+        let u = pts[(i + 1) % 4] - pts[i];
+        let w = pts[(i + 2) % 4] - pts[(i + 1) % 4];
+        u.cross(w).dot(unit) > 1e-12 * u.length() * w.length()
+    });
+    (!convex).then_some("quadrilateral is not convex")
+}
+
+/// The top-level faces of `m` that are not patches (triangles or planar
+/// convex quadrilaterals within `eps`), with the reason, in file order:
+/// what [`Mesh::from_model`] would refuse. Faces it would drop as degenerate
+/// are not listed.
+pub fn not_patches(m: &Model, eps: f64) -> Vec<(String, String)> {
+    m.top_faces()
+        .enumerate()
+        .filter_map(|(k, f)| {
+            let face = &m.faces[f.idx()];
+            let reason = shape_problem(m, face).or_else(|| {
+                let pts: Vec<DVec3> = face.contours[0].iter().map(|&v| m.pos(v)).collect();
+                quad_problem(&pts, eps).map(str::to_string)
+            })?;
+            Some((label(m, f, k), reason))
+        })
+        .collect()
+}
+
 /// A patch as read from its face, before surfaces are known.
 struct RawPatch {
     face: FaceId,
@@ -184,20 +243,11 @@ impl Mesh {
                 face: label(m, f, k),
                 reason,
             };
-            if face.contours.len() != 1 {
-                return Err(not_patch(format!(
-                    "{} contours (holes or islands)",
-                    face.contours.len()
-                )));
+            if let Some(reason) = shape_problem(m, face) {
+                return Err(not_patch(reason));
             }
             let c = &face.contours[0];
-            if c.len() != 3 && c.len() != 4 {
-                return Err(not_patch(format!("{} vertices", c.len())));
-            }
             let pts: Vec<DVec3> = c.iter().map(|&v| m.pos(v)).collect();
-            if !pts.iter().all(|p| p.is_finite()) {
-                return Err(not_patch("non-finite coordinates".into()));
-            }
             let mut cls = [NONE; 4];
             for (i, &v) in c.iter().enumerate() {
                 cls[i] = classes.class(v, m.pos(v));
@@ -223,20 +273,9 @@ impl Mesh {
                 ));
                 continue;
             }
-            let unit = newell.normalize();
             let centroid = pts.iter().copied().sum::<DVec3>() / n as f64;
-            if n == 4 {
-                if pts.iter().any(|&p| (p - centroid).dot(unit).abs() > eps) {
-                    return Err(not_patch("quadrilateral is not planar".into()));
-                }
-                let convex = (0..4).all(|i| {
-                    let u = pts[(i + 1) % 4] - pts[i];
-                    let w = pts[(i + 2) % 4] - pts[(i + 1) % 4];
-                    u.cross(w).dot(unit) > 1e-12 * u.length() * w.length()
-                });
-                if !convex {
-                    return Err(not_patch("quadrilateral is not convex".into()));
-                }
+            if let Some(reason) = quad_problem(&pts, eps) {
+                return Err(not_patch(reason.into()));
             }
             raw.push(RawPatch {
                 face: f,

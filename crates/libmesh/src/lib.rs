@@ -158,7 +158,7 @@ mod write;
 #[cfg(test)]
 mod tests;
 
-pub use build::BuildError;
+pub use build::{BuildError, not_patches};
 pub use write::VertexColours;
 
 macro_rules! id_type {

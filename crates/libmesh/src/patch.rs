@@ -43,7 +43,7 @@ use spade::{
     AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
 };
 use ug::{Face, FaceId, Item, Model, Vertex, VertexId};
-use winged::pieces::{Repair, Snapper, repair, replace};
+use winged::pieces::replace;
 
 #[derive(Clone, Copy, Debug)]
 pub struct Options {
@@ -76,8 +76,8 @@ pub struct Stats {
     pub tvertices: usize,
     /// Non-planar faces folded into triangles first.
     pub tessellated: Vec<String>,
-    /// Faces whose contours crossed or touched themselves, and into how many
-    /// sound pieces they were split.
+    /// Faces whose contours crossed or touched themselves (repaired; the
+    /// count of pieces is not kept: 0).
     pub repaired: Vec<(String, usize)>,
     /// Faces left out, and why (no area).
     pub dropped: Vec<(String, String)>,
@@ -151,7 +151,6 @@ pub fn prepare(m: &Model, eps: f64, stats: &mut Stats) -> Model {
         .dropped
         .extend(dropped.into_iter().map(|(f, why)| (label(f), why)));
     stats.tvertices = winged::weld::split_edges(&mut mesh, eps).inserted;
-    let mut snap = Snapper::new(&mesh, eps);
     let faces: Vec<FaceId> = mesh.faces().collect();
     for f in faces {
         let name = mesh
@@ -159,8 +158,7 @@ pub fn prepare(m: &Model, eps: f64, stats: &mut Stats) -> Model {
             .name
             .clone()
             .unwrap_or_else(|| format!("f{}", f.0 + 1));
-        let mut work = vec![f];
-        // Not planar: the triangles ugplanar would make, each then repaired.
+        // Not planar: the triangles ugplanar would make.
         let pts = mesh.face_points(f);
         let off = Plane::fit(&pts[0]).map_or(0.0, |pl| {
             pts.iter()
@@ -177,74 +175,20 @@ pub fn prepare(m: &Model, eps: f64, stats: &mut Stats) -> Model {
                 .map(|t| vec![t.iter().map(|&i| ids[i]).collect()])
                 .collect();
             stats.tessellated.push(label(f));
-            work = match replace(&mut mesh, f, pieces, &name, "t") {
-                Repair::Pieces(v) => v,
-                _ => Vec::new(),
-            };
-        }
-        // Each piece is repaired again in its own meshing frame until it is
-        // sound there (a few rounds at most: the frames differ only by a
-        // rotation, which matters only for contours within rounding of
-        // touching).
-        let mut pieces = 0;
-        let mut changed = false;
-        let mut work: Vec<(FaceId, usize)> = work.into_iter().map(|g| (g, 0)).collect();
-        while let Some((g, round)) = work.pop() {
-            match repair(&mut mesh, g, eps, &mut snap, &name, mesh_frame) {
-                Repair::Sound => pieces += 1,
-                Repair::Pieces(v) if round < 3 => {
-                    changed = true;
-                    work.extend(v.into_iter().rev().map(|h| (h, round + 1)));
-                }
-                Repair::Pieces(v) => {
-                    pieces += v.len();
-                    changed = true;
-                }
-                Repair::Removed => changed = true,
-            }
-        }
-        if pieces == 0 {
-            stats
-                .dropped
-                .push((label(f), "no area (its contours enclose nothing)".into()));
-        } else if changed {
-            stats.repaired.push((label(f), pieces));
+            replace(&mut mesh, f, pieces, &name, "t");
         }
     }
-    // New vertices (crossings) may lie on other faces' edges: insert them,
-    // and repair the faces that changed, until nothing changes.
-    let mut created = 0;
-    for _ in 0..4 {
-        if snap.created == created {
-            break;
-        }
-        created = snap.created;
-        let before: FxHashMap<FaceId, usize> = mesh
-            .faces()
-            .map(|f| (f, mesh.face(f).contours.iter().map(Vec::len).sum()))
-            .collect();
-        stats.tvertices += winged::weld::split_edges(&mut mesh, eps).inserted;
-        let dirty: Vec<FaceId> = mesh
-            .faces()
-            .filter(|f| {
-                before.get(f).copied() != Some(mesh.face(*f).contours.iter().map(Vec::len).sum())
-            })
-            .collect();
-        for g in dirty {
-            let name = mesh
-                .face(g)
-                .name
-                .clone()
-                .unwrap_or_else(|| format!("f{}", g.0 + 1));
-            let mut work = vec![(g, 0)];
-            while let Some((h, round)) = work.pop() {
-                if let Repair::Pieces(v) = repair(&mut mesh, h, eps, &mut snap, &name, mesh_frame)
-                    && round < 3
-                {
-                    work.extend(v.into_iter().rev().map(|x| (x, round + 1)));
-                }
-            }
-        }
+    // Every face sound in the frame it is meshed in (see `mesh_frame`).
+    let mut settled = winged::pieces::Settled::default();
+    winged::pieces::repair_all(&mut mesh, eps, &mesh_frame, &|_| false, &mut settled);
+    stats.tvertices += settled.tvertices;
+    for f in &settled.repaired {
+        stats.repaired.push((label(*f), 0));
+    }
+    for f in &settled.removed {
+        stats
+            .dropped
+            .push((label(*f), "no area (its contours enclose nothing)".into()));
     }
     mesh.into_model()
 }
@@ -355,8 +299,9 @@ pub fn cut(m: &Model, opts: Options) -> Result<(Model, Stats), String> {
         ..Model::default()
     };
     let mut emitted = m.vertices.len(); // vertices of cx.vertices already written
-    let mut twins: FxHashMap<Vec<VertexId>, (Option<DVec3>, Vec<Vec<Vec<VertexId>>>)> =
-        FxHashMap::default();
+    // A face's sorted vertices → (its normal, its patches).
+    type Patches = Vec<Vec<Vec<VertexId>>>;
+    let mut twins: FxHashMap<Vec<VertexId>, (Option<DVec3>, Patches)> = FxHashMap::default();
     let mut edge_sum = 0.0;
     let mut edge_count = 0usize;
     for it in &m.items {
@@ -915,22 +860,34 @@ fn remove_slivers(
             // A point inside the quad: the best candidate.
             let quad = [pa, px, pb, pm];
             let mut best: Option<(f64, DVec2)> = None;
+            let mut consider = |q: DVec2| {
+                let hmin = (0..4)
+                    .map(|j| {
+                        let tri = [quad[j], quad[(j + 1) % 4], q];
+                        if ccw(tri) { shape(tri).0 } else { -1.0 }
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                if best.is_none_or(|(bh, _)| hmin > bh) {
+                    best = Some((hmin, q));
+                }
+            };
             for wa in [1.0, 2.0, 4.0] {
                 for wx in [1.0, 2.0, 4.0] {
                     for wb in [1.0, 4.0, 16.0] {
                         for wm in [1.0, 4.0, 16.0] {
-                            let q = (pa * wa + px * wx + pb * wb + pm * wm) / (wa + wx + wb + wm);
-                            let hmin = (0..4)
-                                .map(|j| {
-                                    let tri = [quad[j], quad[(j + 1) % 4], q];
-                                    if ccw(tri) { shape(tri).0 } else { -1.0 }
-                                })
-                                .fold(f64::INFINITY, f64::min);
-                            if best.is_none_or(|(bh, _)| hmin > bh) {
-                                best = Some((hmin, q));
-                            }
+                            consider((pa * wa + px * wx + pb * wb + pm * wm) / (wa + wx + wb + wm));
                         }
                     }
+                }
+            }
+            // In a long thin quad the good point sits off a short side,
+            // about that side's length inside: the averages above land
+            // near the far end.
+            for j in 0..4 {
+                let (u, w) = (quad[j], quad[(j + 1) % 4]);
+                let inward = (w - u).perp();
+                for t in [0.25, 0.5, 1.0, 2.0] {
+                    consider((u + w) / 2.0 + inward * t);
                 }
             }
             match best {

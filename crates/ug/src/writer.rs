@@ -196,7 +196,9 @@ impl Writer<'_, '_> {
                     _ => &[],
                 };
                 for &v in names.iter().flatten() {
-                    if at.get(v.idx()).is_some_and(|&p| p != NOWHERE && p as usize > k)
+                    if at
+                        .get(v.idx())
+                        .is_some_and(|&p| p != NOWHERE && p as usize > k)
                         && !early.get(v.idx()).copied().unwrap_or(false)
                     {
                         if early.is_empty() {

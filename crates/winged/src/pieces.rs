@@ -153,6 +153,43 @@ impl Layout {
         }
     }
 
+    /// Adds a closed ring of points, each a vertex or not: a neighbour's
+    /// contour clipped to a box around the face ([`clip_ring`]); its points
+    /// on the box lie away from the face and never become corners of its
+    /// pieces.
+    pub fn ring(&mut self, pts: &[(DVec2, Option<VertexId>)], tag: Tag) {
+        if pts.len() < 3 {
+            return;
+        }
+        let ks: Vec<u32> = pts
+            .iter()
+            .map(|&(p, v)| match v {
+                Some(v) => {
+                    if let Some(&k) = self.index.get(&v) {
+                        return k;
+                    }
+                    let k = self.ids.len() as u32;
+                    self.ids.push(v);
+                    self.points.push(p);
+                    self.index.insert(v, k);
+                    k
+                }
+                None => {
+                    let k = self.ids.len() as u32;
+                    self.ids.push(VertexId(u32::MAX));
+                    self.points.push(p);
+                    k
+                }
+            })
+            .collect();
+        for i in 0..ks.len() {
+            let (a, b) = (ks[i], ks[(i + 1) % ks.len()]);
+            if a != b {
+                self.segments.push(Segment { a, b, tag });
+            }
+        }
+    }
+
     /// The input point of vertex `v` at `p` (added on first use).
     pub fn point(&mut self, v: VertexId, p: DVec3) -> u32 {
         if let Some(&k) = self.index.get(&v) {
@@ -199,6 +236,55 @@ impl Layout {
             })
             .collect()
     }
+}
+
+/// A closed ring clipped to the box [lo, hi] (Sutherland–Hodgman): points
+/// inside keep their vertex, points made on the box have none. Empty when
+/// the ring misses the box.
+pub fn clip_ring(
+    ring: &[(DVec2, Option<VertexId>)],
+    lo: DVec2,
+    hi: DVec2,
+) -> Vec<(DVec2, Option<VertexId>)> {
+    let mut pts = ring.to_vec();
+    for (axis, bound, above) in [
+        (0, lo.x, true),
+        (0, hi.x, false),
+        (1, lo.y, true),
+        (1, hi.y, false),
+    ] {
+        if pts.is_empty() {
+            break;
+        }
+        let val = |p: DVec2| if axis == 0 { p.x } else { p.y };
+        let ins = |p: DVec2| {
+            if above {
+                val(p) >= bound
+            } else {
+                val(p) <= bound
+            }
+        };
+        let mut out = Vec::with_capacity(pts.len() + 4);
+        for i in 0..pts.len() {
+            let (p, q) = (pts[i], pts[(i + 1) % pts.len()]);
+            let (pi, qi) = (ins(p.0), ins(q.0));
+            if pi {
+                out.push(p);
+            }
+            if pi != qi {
+                let t = (bound - val(p.0)) / (val(q.0) - val(p.0));
+                let mut x = p.0 + (q.0 - p.0) * t;
+                if axis == 0 {
+                    x.x = bound;
+                } else {
+                    x.y = bound;
+                }
+                out.push((x, None));
+            }
+        }
+        pts = out;
+    }
+    pts
 }
 
 /// Loops of points as contours of vertices: `vertex` makes (or finds) the
@@ -324,10 +410,8 @@ pub fn replace(
         ids.push(f);
     }
     let _ = name;
-    let mut k = 1;
     let mut last = f;
-    for c in it {
-        k += 1;
+    for (k, c) in (2..).zip(it) {
         let pname = face.name.as_ref().map(|n| format!("{n}.{tag}{k}"));
         let g = mesh.add_face(
             Some(last),
@@ -347,4 +431,195 @@ pub fn replace(
     } else {
         Repair::Pieces(ids)
     }
+}
+
+/// Whether a face's contours are sound in `frame`: no vertex visited twice,
+/// no edge crossing another, no vertex within `eps` of an edge it is not an
+/// end of. Cheap for the small faces that are most of a model; faces with
+/// many vertices use an index of their edges.
+pub fn sound(mesh: &Mesh, f: FaceId, frame: &Frame, eps: f64) -> bool {
+    use geom::{SegmentContact, segments_2d};
+    let face = mesh.face(f);
+    let mut ids: Vec<VertexId> = face.contours.iter().flatten().copied().collect();
+    let n = ids.len();
+    ids.sort_unstable();
+    ids.dedup();
+    // A vertex shared by two contours (a hole hung on the outer contour) is
+    // fine; one contour visiting a vertex twice is not.
+    for c in &face.contours {
+        let mut s = c.clone();
+        s.sort_unstable();
+        if s.windows(2).any(|w| w[0] == w[1]) || c.len() < 3 {
+            return false;
+        }
+    }
+    let mut edges: Vec<(VertexId, VertexId, DVec2, DVec2)> = Vec::with_capacity(n);
+    for c in &face.contours {
+        for i in 0..c.len() {
+            let (a, b) = (c[i], c[(i + 1) % c.len()]);
+            edges.push((a, b, frame.to_2d(mesh.pos(a)), frame.to_2d(mesh.pos(b))));
+        }
+    }
+    let index = (edges.len() > 24).then(|| {
+        geom::BoxIndex::new(edges.iter().enumerate().map(|(k, e)| {
+            (
+                (e.2.min(e.3) - DVec2::splat(eps)).extend(0.0),
+                (e.2.max(e.3) + DVec2::splat(eps)).extend(0.0),
+                k as u32,
+            )
+        }))
+    });
+    let near = |lo: DVec2, hi: DVec2| -> Vec<usize> {
+        match &index {
+            Some(ix) => ix
+                .query(lo.extend(0.0), hi.extend(0.0))
+                .into_iter()
+                .map(|k| k as usize)
+                .collect(),
+            None => (0..edges.len()).collect(),
+        }
+    };
+    for (i, e) in edges.iter().enumerate() {
+        if (e.3 - e.2).length() <= eps {
+            return false;
+        }
+        for j in near(e.2.min(e.3), e.2.max(e.3)) {
+            if j <= i {
+                continue;
+            }
+            let g = &edges[j];
+            if e.0 == g.0 || e.0 == g.1 || e.1 == g.0 || e.1 == g.1 {
+                continue;
+            }
+            if segments_2d(e.2, e.3, g.2, g.3) != SegmentContact::None {
+                return false;
+            }
+        }
+    }
+    for &v in &ids {
+        let p = frame.to_2d(mesh.pos(v));
+        for k in near(p - DVec2::splat(eps), p + DVec2::splat(eps)) {
+            let e = &edges[k];
+            if e.0 == v || e.1 == v {
+                continue;
+            }
+            let d = e.3 - e.2;
+            let l2 = d.length_squared();
+            let t = if l2 > 0.0 {
+                ((p - e.2).dot(d) / l2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            if (e.2 + d * t - p).length() <= eps {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// What [`settle`] did.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Settled {
+    /// Vertices welded into an earlier one within epsilon.
+    pub welded: usize,
+    /// Vertices inserted into edges (T-vertices removed).
+    pub tvertices: usize,
+    /// Faces whose contours were repaired (split, snapped), by id before repair.
+    pub repaired: Vec<FaceId>,
+    /// Faces dropped: nothing with area was left.
+    pub removed: Vec<FaceId>,
+    /// New vertices the repairs made (crossings).
+    pub created: usize,
+}
+
+/// Brings a mesh to the state every cleaning tool leaves it in: vertices
+/// within `eps` welded, T-vertices inserted, and every face sound in its
+/// plane ([`sound`]; a face that is not is [`repair`]ed in the frame `frame`
+/// gives it). Repairs can make vertices (crossings) that lie on other faces'
+/// edges, so T-vertices are inserted again and the faces that changed are
+/// checked again, until nothing changes (a few rounds at most). Faces are
+/// processed in id order: the result is deterministic.
+pub fn settle(
+    mesh: &mut Mesh,
+    eps: f64,
+    frame: &dyn Fn(&[Vec<DVec3>]) -> Option<Frame>,
+    skip_repair: &dyn Fn(FaceId) -> bool,
+) -> Settled {
+    let mut st = Settled::default();
+    let (welded, dropped) = crate::weld::merge_vertices(mesh, eps);
+    st.welded = welded;
+    st.removed.extend(dropped.into_iter().map(|(f, _)| f));
+    st.tvertices += crate::weld::split_edges(mesh, eps).inserted;
+    repair_all(mesh, eps, frame, skip_repair, &mut st);
+    st
+}
+
+/// The repair part of [`settle`], on a mesh already welded and without
+/// T-vertices.
+pub fn repair_all(
+    mesh: &mut Mesh,
+    eps: f64,
+    frame: &dyn Fn(&[Vec<DVec3>]) -> Option<Frame>,
+    skip_repair: &dyn Fn(FaceId) -> bool,
+    st: &mut Settled,
+) {
+    let mut snap = Snapper::new(mesh, eps);
+    let mut dirty: Vec<FaceId> = mesh.faces().collect();
+    for _ in 0..4 {
+        let created = snap.created;
+        for &f in &dirty {
+            if !mesh.is_face_live(f) || skip_repair(f) {
+                continue;
+            }
+            let mut work = vec![(f, 0usize)];
+            while let Some((g, round)) = work.pop() {
+                let Some(fr) = frame(&mesh.face_points(g)) else {
+                    mesh.remove_face(g);
+                    st.removed.push(g);
+                    continue;
+                };
+                if sound(mesh, g, &fr, eps) {
+                    continue;
+                }
+                let name = mesh
+                    .face(g)
+                    .name
+                    .clone()
+                    .unwrap_or_else(|| format!("f{}", g.0 + 1));
+                match repair(mesh, g, eps, &mut snap, &name, |p| frame(p)) {
+                    Repair::Sound => {}
+                    Repair::Pieces(v) => {
+                        if round == 0 {
+                            st.repaired.push(g);
+                        }
+                        if round < 3 {
+                            work.extend(v.into_iter().rev().map(|h| (h, round + 1)));
+                        }
+                    }
+                    Repair::Removed => st.removed.push(g),
+                }
+            }
+        }
+        if snap.created == created {
+            break;
+        }
+        let before: FxHashMap<FaceId, usize> = mesh
+            .faces()
+            .map(|f| (f, mesh.face(f).contours.iter().map(Vec::len).sum()))
+            .collect();
+        st.tvertices += crate::weld::split_edges(mesh, eps).inserted;
+        dirty = mesh
+            .faces()
+            .filter(|f| {
+                before.get(f).copied() != Some(mesh.face(*f).contours.iter().map(Vec::len).sum())
+            })
+            .collect();
+        if dirty.is_empty() {
+            break;
+        }
+    }
+    st.created += snap.created;
+    st.repaired.sort_unstable();
+    st.repaired.dedup();
 }

@@ -758,12 +758,47 @@ impl Conv<'_> {
                     return Err(f.err(&toks[1], "wavelengths must be positive and increasing"));
                 }
                 let mut v = Vec::with_capacity(toks.len() - 3);
+                let mut lowest: Option<(f64, &OTok)> = None;
                 for t in &toks[3..] {
                     let x = f.num(t, "spectral value")?;
                     if x < 0.0 {
-                        return Err(f.err(t, "negative spectral value"));
+                        // Measured tables dip below zero by noise: clamp.
+                        if lowest.is_none_or(|(l, _)| x < l) {
+                            lowest = Some((x, t));
+                        }
+                        v.push(0.0);
+                    } else {
+                        v.push(x);
                     }
-                    v.push(x);
+                }
+                if let Some((x, t)) = lowest {
+                    // One warning per material (or colour, outside one).
+                    let (what, name) = match (&self.mats.name, &self.colors.name) {
+                        (Some(m), _) => ("material", m.clone()),
+                        (None, Some(c)) => ("colour", c.clone()),
+                        (None, None) => ("colour", Vec::new()),
+                    };
+                    let mut key = b"cspec<0 ".to_vec();
+                    key.extend_from_slice(what.as_bytes());
+                    key.push(b' ');
+                    key.extend_from_slice(&name);
+                    if self.warned.insert(key) {
+                        let who = if name.is_empty() {
+                            "the current colour".to_string()
+                        } else {
+                            format!("{what} {}", quote(&name))
+                        };
+                        self.warn.push(
+                            "spectrum",
+                            warning(
+                                &f.name,
+                                t,
+                                format!(
+                                    "negative spectral samples (down to {x}) in {who} clamped to 0"
+                                ),
+                            ),
+                        );
+                    }
                 }
                 let c = Chroma::from_xyz(color::cspec_xyz(lmin, lmax, &v))
                     .ok_or_else(|| f.err(&toks[0], "the spectrum has no visible energy"))?;
@@ -995,10 +1030,42 @@ impl Conv<'_> {
         while seq.len() > 1 && seq.first() == seq.last() {
             seq.pop();
         }
-        let loops: Vec<Vec<usize>> = split_seams(seq)
-            .into_iter()
-            .filter(|l| l.len() >= 3)
-            .collect();
+        // Seams first (an edge walked both ways), then pinches (a loop that
+        // passes a vertex twice: a hole hung on one vertex, or two loops
+        // meeting at a corner).
+        let mut loops: Vec<Vec<usize>> = Vec::new();
+        let mut pinched: Vec<Vec<usize>> = Vec::new();
+        for l in split_seams(seq) {
+            let pieces = split_pinches(l);
+            if pieces.len() > 1 {
+                pinched.extend(pieces.into_iter().filter(|p| p.len() >= 3));
+            } else {
+                loops.extend(pieces.into_iter().filter(|p| p.len() >= 3));
+            }
+        }
+        if !pinched.is_empty() {
+            // The largest loop is the outline; a pinched piece inside it is a
+            // hole, one outside it is a face of its own.
+            let pts = |l: &[usize]| l.iter().map(|&i| corners[i].p).collect::<Vec<_>>();
+            let area = |l: &[usize]| geom::newell_normal(&pts(l)).length();
+            let all: Vec<Vec<usize>> = loops.iter().chain(&pinched).cloned().collect();
+            let outer = (0..all.len())
+                .max_by(|&a, &b| area(&all[a]).total_cmp(&area(&all[b])).then(b.cmp(&a)))
+                .unwrap_or(0);
+            let outline = pts(&all[outer]);
+            let mut separate = Vec::new();
+            for p in pinched {
+                if p == all[outer] || inside_loop(&outline, &pts(&p)) {
+                    loops.push(p);
+                } else {
+                    separate.push(p);
+                }
+            }
+            for p in separate {
+                let contour: Vec<Corner> = p.iter().map(|&i| corners[i].clone()).collect();
+                self.polygon_with_holes(f, &toks[0], vec![contour])?;
+            }
+        }
         if loops.is_empty() {
             self.warn.push(
                 "degenerate",
@@ -1009,13 +1076,6 @@ impl Conv<'_> {
                 ),
             );
             return Ok(());
-        }
-        let mut seen = FxHashSet::default();
-        if !loops.iter().flatten().all(|v| seen.insert(*v)) {
-            return Err(f.err(
-                &toks[0],
-                "face repeats a vertex that is not part of a seam (a hole's seam is an edge walked once each way, as in 'f a b c d e f g h e d')",
-            ));
         }
         let contours: Vec<Vec<Corner>> = loops
             .iter()
@@ -1537,6 +1597,71 @@ pub fn split_seams(seq: Vec<usize>) -> Vec<Vec<usize>> {
         }
     }
     done
+}
+
+/// Splits a cyclic vertex sequence wherever it passes a vertex twice (a
+/// pinch: `a b c d e c f` is the loops `c d e` and `c f a b`), until no loop
+/// repeats a vertex. One loop without repeats is returned as it is.
+pub fn split_pinches(seq: Vec<usize>) -> Vec<Vec<usize>> {
+    let mut work = vec![seq];
+    let mut done = Vec::new();
+    while let Some(s) = work.pop() {
+        let mut first: FxHashMap<usize, usize> = FxHashMap::default();
+        let mut found = None;
+        for (j, &v) in s.iter().enumerate() {
+            if let Some(&i) = first.get(&v) {
+                found = Some((i, j));
+                break;
+            }
+            first.insert(v, j);
+        }
+        match found {
+            Some((i, j)) => {
+                let inner: Vec<usize> = s[i..j].to_vec();
+                let mut outer: Vec<usize> = s[j..].to_vec();
+                outer.extend_from_slice(&s[..i]);
+                work.push(inner);
+                work.push(outer);
+            }
+            None => done.push(s),
+        }
+    }
+    done
+}
+
+/// Whether the loop `inner` lies inside the polygon `outer` (both in one
+/// plane): judged at the midpoints of `inner`'s edges, by majority, so that
+/// corners it shares with `outer` do not decide.
+fn inside_loop(outer: &[DVec3], inner: &[DVec3]) -> bool {
+    let n = geom::newell_normal(outer);
+    let axis = if n.x.abs() >= n.y.abs() && n.x.abs() >= n.z.abs() {
+        0
+    } else if n.y.abs() >= n.z.abs() {
+        1
+    } else {
+        2
+    };
+    let flat = |p: DVec3| match axis {
+        0 => (p.y, p.z),
+        1 => (p.z, p.x),
+        _ => (p.x, p.y),
+    };
+    let poly: Vec<(f64, f64)> = outer.iter().map(|&p| flat(p)).collect();
+    let contains = |(x, y): (f64, f64)| {
+        let mut odd = false;
+        for i in 0..poly.len() {
+            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+            if (a.1 > y) != (b.1 > y) && x < a.0 + (y - a.1) / (b.1 - a.1) * (b.0 - a.0) {
+                odd = !odd;
+            }
+        }
+        odd
+    };
+    let k = inner.len();
+    let votes = (0..k)
+        .filter(|&i| contains(flat((inner[i] + inner[(i + 1) % k]) / 2.0)))
+        .count();
+    2 * votes > k
 }
 
 /// Converts MGF source, reading includes with `read` (relative to `dir`).

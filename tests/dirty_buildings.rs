@@ -1,0 +1,201 @@
+//! Issue #13 end to end through the binaries, on dirty CAD-like buildings
+//! (`ugbuilding --cad`, several seeds, one and two storeys): the user's
+//! pipeline `ugvlmerge | ugisect | ugcut -l 2 | ugrad`, the full chain
+//! passing `ugcheck --deny defects`, `ugvlmerge | ugrad` (ugrad meshing
+//! what is not a patch), and ugflip giving the same orientation before and
+//! after ugvlmerge. The many-seed property runs in process in
+//! `dirty_buildings_prop.rs`.
+
+use std::collections::BTreeMap;
+
+use ugkit::{run, run_ok};
+
+fn building(seed: u64, storeys: usize) -> Vec<u8> {
+    run_ok(
+        "ugbuilding",
+        &[
+            "--cad",
+            "--rooms",
+            "1",
+            "--storeys",
+            &storeys.to_string(),
+            "--seed",
+            &seed.to_string(),
+        ],
+        None,
+    )
+    .into_bytes()
+}
+
+/// Runs the stages in order, each on the previous one's output; every stage
+/// must succeed.
+fn pipe(input: &[u8], stages: &[(&str, &[&str])]) -> Vec<u8> {
+    let mut data = input.to_vec();
+    for (name, args) in stages {
+        let out = run(name, args, Some(&data));
+        assert!(
+            out.status.success(),
+            "{name} {args:?} failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        data = out.stdout;
+    }
+    data
+}
+
+fn check(data: &[u8]) -> serde_json::Value {
+    serde_json::from_str(&run_ok("ugcheck", &["--json"], Some(data))).unwrap()
+}
+
+fn count(r: &serde_json::Value, key: &str) -> usize {
+    r[key].as_array().map_or(0, Vec::len)
+}
+
+/// Every vertex of a lit model has a colour, and some are lit.
+fn assert_lit(data: &[u8], what: &str) {
+    let m = ug::parse(data, what).unwrap().model;
+    assert!(!m.faces.is_empty(), "{what}: no faces");
+    assert!(
+        m.vertices.iter().all(|v| v.color.is_some()),
+        "{what}: a vertex without a colour"
+    );
+    let lit = m
+        .vertices
+        .iter()
+        .filter(|v| v.color.is_some_and(|c| m.material(c).diffuse()[0] > 0.0))
+        .count();
+    assert!(lit > 0, "{what}: nothing lit");
+}
+
+const SEEDS: [(u64, usize); 3] = [(1, 1), (2, 2), (7, 1)];
+
+#[test]
+fn the_users_pipeline_lights_dirty_buildings() {
+    for (seed, storeys) in SEEDS {
+        let input = building(seed, storeys);
+        let patches = pipe(
+            &input,
+            &[
+                ("ugvlmerge", &[]),
+                ("ugisect", &[]),
+                ("ugcut", &["-l", "2"]),
+            ],
+        );
+        let r = check(&patches);
+        assert_eq!(count(&r, "nonpatch"), 0, "seed {seed}: {}", r["nonpatch"]);
+        let lit = pipe(&patches, &[("ugrad", &["--max-shots", "3", "-q"])]);
+        assert_lit(&lit, &format!("seed {seed}"));
+    }
+}
+
+#[test]
+fn the_full_chain_passes_ugcheck_deny_defects() {
+    for (seed, storeys) in SEEDS {
+        let input = building(seed, storeys);
+        let clean = pipe(
+            &input,
+            &[
+                ("ugplanar", &[]),
+                ("ugvlmerge", &[]),
+                ("ugflip", &[]),
+                ("ugisect", &[]),
+                ("ugcopl", &[]),
+                ("ugclean", &[]),
+            ],
+        );
+        let out = run("ugcheck", &["--deny", "defects"], Some(&clean));
+        assert!(
+            out.status.success(),
+            "seed {seed}: {}",
+            String::from_utf8_lossy(&out.stdout)
+        );
+        // Faces multiply by about 3 (issue #13 aims at 2; pieces hidden
+        // inside walls and slabs stay today): a bound against a return of
+        // the whole-line cuts (×8).
+        let faces = |d: &[u8]| ug::parse(d, "m").unwrap().model.faces.len();
+        assert!(
+            faces(&clean) <= 4 * faces(&input),
+            "seed {seed}: {} → {} faces",
+            faces(&input),
+            faces(&clean)
+        );
+        let patches = pipe(&clean, &[("ugcut", &[])]);
+        let r = check(&patches);
+        for key in [
+            "nonpatch",
+            "tvertices",
+            "degenerate",
+            "overlapping",
+            "intersecting",
+        ] {
+            assert_eq!(count(&r, key), 0, "seed {seed}: {key}: {}", r[key]);
+        }
+        let lit = pipe(&patches, &[("ugrad", &["--max-shots", "3", "-q"])]);
+        assert_lit(&lit, &format!("seed {seed} (chain)"));
+    }
+}
+
+#[test]
+fn ugrad_meshes_what_the_grouper_leaves() {
+    let input = building(3, 1);
+    let grouped = pipe(&input, &[("ugvlmerge", &[])]);
+    let out = run("ugrad", &["--max-shots", "3"], Some(&grouped));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(
+        err.lines().filter(|l| l.contains("not patches")).count(),
+        1,
+        "{err}"
+    );
+    assert_lit(&out.stdout, "ugvlmerge | ugrad");
+}
+
+/// Σ area × normal per material: a face oriented the other way changes it
+/// by twice its area.
+fn oriented_area(data: &[u8]) -> BTreeMap<String, [f64; 3]> {
+    let m = ug::parse(data, "m").unwrap().model;
+    let mut out: BTreeMap<String, [f64; 3]> = BTreeMap::new();
+    for f in m.top_faces() {
+        let face = &m.faces[f.idx()];
+        let name = face
+            .material
+            .map_or(String::new(), |k| m.materials[k.idx()].name.clone());
+        let mut n = glam::DVec3::ZERO;
+        for c in &face.contours {
+            let pts: Vec<glam::DVec3> = c.iter().map(|&v| m.pos(v)).collect();
+            n += geom::newell_normal(&pts);
+        }
+        let e = out.entry(name).or_default();
+        for k in 0..3 {
+            e[k] += n[k] / 2.0;
+        }
+    }
+    out
+}
+
+#[test]
+fn ugflip_orients_the_same_before_and_after_the_grouper() {
+    for (seed, storeys) in SEEDS {
+        let input = building(seed, storeys);
+        let planar = pipe(&input, &[("ugplanar", &[])]);
+        let before = pipe(&planar, &[("ugflip", &[]), ("ugvlmerge", &[])]);
+        let after = pipe(&planar, &[("ugvlmerge", &[]), ("ugflip", &[])]);
+        // (Inconsistent edges are not asked about here: duplicate faces
+        // facing the same way share their edges until ugclean.)
+        let (a, b) = (oriented_area(&before), oriented_area(&after));
+        assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
+        for (k, x) in &a {
+            let y = &b[k];
+            for i in 0..3 {
+                assert!(
+                    (x[i] - y[i]).abs() <= 1e-6 * (1.0 + x[i].abs()),
+                    "seed {seed}, {k}: {x:?} vs {y:?}"
+                );
+            }
+        }
+    }
+}
