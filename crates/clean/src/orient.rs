@@ -441,6 +441,7 @@ fn automatic(
         })
         .collect();
     let bvh = scene(mesh);
+    let objects = Objects::new(&comps, &object_of, &samples);
 
     // 2. Decide each component's side: +1 keep, -1 flip, 0 ambiguous.
     let decisions: Vec<(i32, Reason)> = comps
@@ -448,7 +449,7 @@ fn automatic(
         .enumerate()
         .map(|(c, members)| {
             decide(
-                mesh, &bvh, &comp, &rel, &samples, c, members, &comps, &object_of, opts,
+                mesh, &bvh, &comp, &rel, &samples, c, members, &objects, &object_of, opts,
             )
         })
         .collect();
@@ -500,7 +501,7 @@ fn decide(
     samples: &[Option<Sample>],
     c: usize,
     members: &[FaceId],
-    comps: &[Vec<FaceId>],
+    objects: &Objects,
     object_of: &[usize],
     opts: &Options,
 ) -> (i32, Reason) {
@@ -532,7 +533,7 @@ fn decide(
         let (lo, hi) = bbox_of(mesh, members);
         let size = (hi - lo).length();
         if vol.abs() > opts.eps * total_area.max(size * size) {
-            let encloses = encloses(bvh, comp, samples, c, comps, object_of, opts, lo, hi);
+            let encloses = encloses(mesh, members, samples, c, objects, object_of, opts, lo, hi);
             let outward = vol > 0.0;
             return if encloses {
                 (if outward { -1 } else { 1 }, Reason::Inward)
@@ -548,25 +549,41 @@ fn decide(
     // scene each side sees; a face close under a ceiling sees little behind it.
     let dirs = hemisphere(opts.rays.max(1));
     // [front, back] for other components and for the component's own faces.
-    let (mut other, mut own) = ([0.0f64; 2], [0.0f64; 2]);
-    for &f in members {
-        let Some(s) = &samples[f.idx()] else { continue };
-        let frame = Frame::new(s.p, s.n);
-        let delta = opts.eps.max(1e-9 * (1.0 + s.p.length()));
-        let w = s.area / dirs.len() as f64;
-        for (k, side) in [1.0, -1.0].into_iter().enumerate() {
-            for (i, d) in dirs.iter().enumerate() {
-                let o = s.spread[i % s.spread.len()] + s.n * (side * delta);
-                let dir = (frame.u * d.x + frame.v * d.y + frame.n * d.z) * side;
-                if let Some(h) = bvh.intersect(o, dir, 0.0, f64::INFINITY, |id| id != f.0) {
-                    let seen = h.t * h.t * w;
-                    if comp[h.id as usize] == c {
-                        own[k] += seen;
-                    } else {
-                        other[k] += seen;
+    // Per face in parallel (a building floor is one component of tens of
+    // thousands of faces), summed in member order: the same bytes at any
+    // thread count.
+    let per_face: Vec<([f64; 2], [f64; 2])> = members
+        .par_iter()
+        .map(|&f| {
+            let (mut other, mut own) = ([0.0f64; 2], [0.0f64; 2]);
+            let Some(s) = &samples[f.idx()] else {
+                return (other, own);
+            };
+            let frame = Frame::new(s.p, s.n);
+            let delta = opts.eps.max(1e-9 * (1.0 + s.p.length()));
+            let w = s.area / dirs.len() as f64;
+            for (k, side) in [1.0, -1.0].into_iter().enumerate() {
+                for (i, d) in dirs.iter().enumerate() {
+                    let o = s.spread[i % s.spread.len()] + s.n * (side * delta);
+                    let dir = (frame.u * d.x + frame.v * d.y + frame.n * d.z) * side;
+                    if let Some(h) = bvh.intersect(o, dir, 0.0, f64::INFINITY, |id| id != f.0) {
+                        let seen = h.t * h.t * w;
+                        if comp[h.id as usize] == c {
+                            own[k] += seen;
+                        } else {
+                            other[k] += seen;
+                        }
                     }
                 }
             }
+            (other, own)
+        })
+        .collect();
+    let (mut other, mut own) = ([0.0f64; 2], [0.0f64; 2]);
+    for (o, w) in &per_face {
+        for k in 0..2 {
+            other[k] += o[k];
+            own[k] += w[k];
         }
     }
     let verdict = |s: [f64; 2]| {
@@ -595,15 +612,46 @@ fn bbox_of(mesh: &Mesh, members: &[FaceId]) -> (DVec3, DVec3) {
     )
 }
 
+/// The objects (components joined by shared edges) with their sampled
+/// faces, components in order and members in order, and an index of their
+/// sample boxes: a closed component looks only at objects within its box.
+struct Objects {
+    /// Per object root (component id of the root): its faces with samples.
+    members: Vec<Vec<FaceId>>,
+    index: geom::index::BoxIndex,
+}
+
+impl Objects {
+    fn new(comps: &[Vec<FaceId>], object_of: &[usize], samples: &[Option<Sample>]) -> Objects {
+        let mut members: Vec<Vec<FaceId>> = vec![Vec::new(); comps.len()];
+        for (k, m) in comps.iter().enumerate() {
+            members[object_of[k]].extend(m.iter().filter(|f| samples[f.idx()].is_some()));
+        }
+        let index = geom::index::BoxIndex::new(members.iter().enumerate().filter_map(|(o, m)| {
+            if m.is_empty() {
+                return None;
+            }
+            let (lo, hi) = geom::index::bbox(
+                m.iter()
+                    .filter_map(|f| samples[f.idx()].as_ref())
+                    .map(|s| s.p),
+                0.0,
+            );
+            Some((lo, hi, o as u32))
+        }));
+        Objects { members, index }
+    }
+}
+
 /// Whether a closed component contains a point of another component (lights
 /// included), a camera eye or a light bomb (ray parity against its own faces).
 #[allow(clippy::too_many_arguments)]
 fn encloses(
-    bvh: &Bvh,
-    comp: &[usize],
+    mesh: &Mesh,
+    members: &[FaceId],
     samples: &[Option<Sample>],
     c: usize,
-    comps: &[Vec<FaceId>],
+    objects: &Objects,
     object_of: &[usize],
     opts: &Options,
     lo: DVec3,
@@ -612,12 +660,28 @@ fn encloses(
     let d = (1e-4 * (hi - lo).length()).max(10.0 * opts.eps);
     let dir = DVec3::new(0.302_775_637, 0.723_606_798, 0.620_349_731).normalize();
     let in_box = |p: DVec3| p.cmpge(lo).all() && p.cmple(hi).all();
+    // Parity against the component's own faces: a BVH of just them (the
+    // scene's, filtered, walks everything along the ray).
+    let own = {
+        let mut tris = Vec::new();
+        for &f in members {
+            let pts = mesh.face_points(f);
+            let flat: Vec<DVec3> = pts.iter().flatten().copied().collect();
+            for t in face_triangles(&pts) {
+                tris.push(Triangle {
+                    p: [flat[t[0]], flat[t[1]], flat[t[2]]],
+                    id: f.0,
+                });
+            }
+        }
+        Bvh::new(tris)
+    };
     let inside = |p: DVec3| {
         if !in_box(p) {
             return false;
         }
-        let mut ts: Vec<f64> = bvh
-            .all_hits(p, dir, 0.0, f64::INFINITY, |id| comp[id as usize] == c)
+        let mut ts: Vec<f64> = own
+            .all_hits(p, dir, 0.0, f64::INFINITY, |_| true)
             .into_iter()
             .map(|h| h.t)
             .collect();
@@ -630,30 +694,36 @@ fn encloses(
     // and just behind it, so a sheet lying on this component's surface — a
     // rug on a floor — is not inside, and neither is a box sunk a little
     // into a slab, whose bottom alone is).
-    let mut by_object: rustc_hash::FxHashMap<usize, Vec<&Sample>> = Default::default();
-    for (k, members) in comps.iter().enumerate() {
-        if object_of[k] == object_of[c] {
+    for o in objects.index.query(lo, hi) {
+        let o = o as usize;
+        if o == object_of[c] {
             continue;
         }
-        for s in members.iter().filter_map(|f| samples[f.idx()].as_ref()) {
-            by_object.entry(object_of[k]).or_default().push(s);
-        }
-    }
-    let mut objects: Vec<usize> = by_object.keys().copied().collect();
-    objects.sort_unstable();
-    for o in objects {
-        let faces = &by_object[&o];
+        let faces: Vec<&Sample> = objects.members[o]
+            .iter()
+            .filter_map(|f| samples[f.idx()].as_ref())
+            .collect();
         if !faces.iter().all(|s| in_box(s.p)) {
             continue;
         }
         let total: f64 = faces.iter().map(|s| s.area).sum();
-        let within: f64 = faces
-            .iter()
-            .filter(|s| inside(s.p + s.n * d) && inside(s.p - s.n * d))
-            .map(|s| s.area)
-            .sum();
-        if total > 0.0 && within > 0.5 * total {
-            return true;
+        if total <= 0.0 {
+            continue;
+        }
+        // Stops as soon as the majority is decided either way.
+        let (mut within, mut without) = (0.0, 0.0);
+        for s in faces.iter() {
+            if inside(s.p + s.n * d) && inside(s.p - s.n * d) {
+                within += s.area;
+                if within > 0.5 * total {
+                    return true;
+                }
+            } else {
+                without += s.area;
+                if without >= 0.5 * total {
+                    break;
+                }
+            }
         }
     }
     // Or a viewpoint (camera eye, explicit point) inside it.
