@@ -346,11 +346,41 @@ fn compare_on_the_cornell_box_reports_every_point() {
             "2",
             "--worst",
             "60",
+            "--keep-unreached",
         ],
         None,
     );
     let (rms, _, n, se) = summary(&out);
     assert_eq!(n, 60, "{out}");
+    // Without --keep-unreached the points no light reaches (the floor under
+    // the blocks, which stand on it uncut) are left out, with a note.
+    let default = run(
+        "ugprobe",
+        &[
+            "--compare",
+            &lit,
+            model,
+            "--random",
+            "60",
+            "--samples",
+            "512",
+            "--seed",
+            "2",
+        ],
+        None,
+    );
+    assert!(default.status.success());
+    let text = String::from_utf8(default.stdout).unwrap();
+    let (_, _, n_default, _) = summary(&text);
+    let err = String::from_utf8_lossy(&default.stderr);
+    assert!(n_default < 60, "{text}");
+    assert!(
+        err.contains(&format!(
+            "note: {} points that no light reaches",
+            60 - n_default
+        )),
+        "{err}"
+    );
     assert!(rms.is_finite() && se > 0.0 && se < 10.0, "{out}");
     // The box is not cleaned (the blocks do not cut the floor, the light
     // hangs below the ceiling): interpolation across those shadow edges

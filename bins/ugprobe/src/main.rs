@@ -101,6 +101,10 @@ struct Args {
     /// --compare: how many of the worst points to list.
     #[arg(long, value_name = "N", default_value_t = 10)]
     worst: usize,
+    /// --compare: also compare points that no light reaches (enclosed
+    /// pieces: reference exactly 0); left out by default.
+    #[arg(long)]
+    keep_unreached: bool,
     /// Column separator of the output.
     #[arg(long, value_enum, default_value = "text")]
     format: Format,
@@ -375,6 +379,26 @@ fn report(
             queries.len(),
             sig(tol)
         )));
+    }
+    // Points no path connected to a light (reference exactly 0, no
+    // variance) are enclosed: a floor piece under a block, a ceiling
+    // behind a flush lamp. No viewer sees them, and a vertex solution
+    // interpolates its lit neighbours into them; they are left out unless
+    // --keep-unreached.
+    let mut looked = looked;
+    let unreached: Vec<usize> = (0..queries.len())
+        .filter(|&i| looked[i].is_some() && est[i].y == 0.0 && est[i].se_y == 0.0)
+        .collect();
+    if !args.keep_unreached && unreached.len() < queries.len() {
+        for &i in &unreached {
+            looked[i] = None;
+        }
+        if !c.quiet && !unreached.is_empty() {
+            eprintln!(
+                "note: {} points that no light reaches (enclosed) left out (--keep-unreached)",
+                unreached.len()
+            );
+        }
     }
     let (errors, summary) = probe::lit::compare(est, &looked).map_err(|e| {
         Failure::runtime(format!(

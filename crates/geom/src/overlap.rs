@@ -113,7 +113,22 @@ pub fn coverage_near(a: &[Vec<DVec2>], b: &[Vec<DVec2>], snap: f64) -> (Coverage
 /// A closed contour clipped to the box [lo, hi] (Sutherland–Hodgman): the
 /// even-odd region inside the box is kept; a contour outside it is empty.
 pub fn clip_to_box(c: &[DVec2], lo: DVec2, hi: DVec2) -> Vec<DVec2> {
-    let mut pts: Vec<DVec2> = c.to_vec();
+    let ring: Vec<(DVec2, ())> = c.iter().map(|&p| (p, ())).collect();
+    clip_ring_to_box(&ring, lo, hi, ())
+        .into_iter()
+        .map(|(p, _)| p)
+        .collect()
+}
+
+/// [`clip_to_box`] for points that carry something (a vertex id): points
+/// inside keep theirs, points made on the box get `made`.
+pub fn clip_ring_to_box<T: Copy>(
+    ring: &[(DVec2, T)],
+    lo: DVec2,
+    hi: DVec2,
+    made: T,
+) -> Vec<(DVec2, T)> {
+    let mut pts = ring.to_vec();
     // (axis, bound, keep values >= bound?)
     for (axis, bound, keep_above) in [
         (0, lo.x, true),
@@ -135,19 +150,19 @@ pub fn clip_to_box(c: &[DVec2], lo: DVec2, hi: DVec2) -> Vec<DVec2> {
         let mut out = Vec::with_capacity(pts.len() + 4);
         for i in 0..pts.len() {
             let (p, q) = (pts[i], pts[(i + 1) % pts.len()]);
-            let (pi, qi) = (ins(p), ins(q));
+            let (pi, qi) = (ins(p.0), ins(q.0));
             if pi {
                 out.push(p);
             }
             if pi != qi {
-                let t = (bound - val(p)) / (val(q) - val(p));
-                let mut x = p + (q - p) * t;
+                let t = (bound - val(p.0)) / (val(q.0) - val(p.0));
+                let mut x = p.0 + (q.0 - p.0) * t;
                 if axis == 0 {
                     x.x = bound;
                 } else {
                     x.y = bound;
                 }
-                out.push(x);
+                out.push((x, made));
             }
         }
         pts = out;

@@ -246,45 +246,7 @@ pub fn clip_ring(
     lo: DVec2,
     hi: DVec2,
 ) -> Vec<(DVec2, Option<VertexId>)> {
-    let mut pts = ring.to_vec();
-    for (axis, bound, above) in [
-        (0, lo.x, true),
-        (0, hi.x, false),
-        (1, lo.y, true),
-        (1, hi.y, false),
-    ] {
-        if pts.is_empty() {
-            break;
-        }
-        let val = |p: DVec2| if axis == 0 { p.x } else { p.y };
-        let ins = |p: DVec2| {
-            if above {
-                val(p) >= bound
-            } else {
-                val(p) <= bound
-            }
-        };
-        let mut out = Vec::with_capacity(pts.len() + 4);
-        for i in 0..pts.len() {
-            let (p, q) = (pts[i], pts[(i + 1) % pts.len()]);
-            let (pi, qi) = (ins(p.0), ins(q.0));
-            if pi {
-                out.push(p);
-            }
-            if pi != qi {
-                let t = (bound - val(p.0)) / (val(q.0) - val(p.0));
-                let mut x = p.0 + (q.0 - p.0) * t;
-                if axis == 0 {
-                    x.x = bound;
-                } else {
-                    x.y = bound;
-                }
-                out.push((x, None));
-            }
-        }
-        pts = out;
-    }
-    pts
+    geom::overlap::clip_ring_to_box(ring, lo, hi, None)
 }
 
 /// Loops of points as contours of vertices: `vertex` makes (or finds) the
