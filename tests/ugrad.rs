@@ -486,3 +486,18 @@ fn the_tail_agrees_with_shooting_patch_by_patch_on_the_cornell_box() {
     // … and the comparison can fail: the tail is not the same solution.
     assert_ne!(s, t);
 }
+
+/// `-v` gives the set-up and final statistics, `-vv` also a line per shot.
+#[test]
+fn shot_lines_only_with_vv() {
+    let input = patches("red-cube.ug", "0.5");
+    let shot_lines = |flag: &str| {
+        let out = run("ugrad", &[flag, "--max-shots", "3"], Some(input.as_bytes()));
+        assert!(out.status.success());
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert!(err.contains("stopped ("), "{err}");
+        err.lines().filter(|l| l.starts_with("shot ")).count()
+    };
+    assert_eq!(shot_lines("-v"), 0);
+    assert_eq!(shot_lines("-vv"), 3);
+}

@@ -9,7 +9,7 @@ use clap::{Parser, ValueEnum};
 const EXAMPLES: &str = "\
 Examples:
   ugcut -l 0.5 clean.ug | ugrad > lit.ug             solve to 1e-3 unshot energy
-  ugrad --converge 1e-4 -v patches.ug -o lit.ug      tighter, with per-shot statistics
+  ugrad --converge 1e-4 -v patches.ug -o lit.ug      tighter, with statistics (-vv: a line per shot)
   ugrad --max-shots 50 --ambient patches.ug          a quick preview with an ambient term
   ugrad --gradient 0.05 --min-edge 0.02 patches.ug   finer adaptive subdivision
   ugrad --output irradiance patches.ug               write H instead of B
@@ -370,7 +370,8 @@ fn main() -> std::process::ExitCode {
             solver.emitted()
         ));
         let bar = c.progress(1000, "unshot energy");
-        let verbose = c.verbose > 0;
+        // One line per shot only with -vv (-v: the set-up and the end).
+        let verbose = c.verbose > 1;
         let t_solve = Instant::now();
         let t_setup = t_start.elapsed() - t_read;
         let stop = solver.solve(Some(interrupt), |s| {
