@@ -31,8 +31,18 @@ pub struct Hdr {
 /// Middle grey that the log-average luminance is mapped to (Reinhard's key).
 pub const KEY: f64 = 0.18;
 
+/// Pixels darker than this fraction of the brightest are not lit: left out
+/// of the automatic exposure. Tiny on purpose: a lamp in view is hundreds
+/// of times brighter than a dim corner, which is still lit; what is left
+/// out is the black of surfaces no light reaches (their radiosity is 0).
+pub const LIT: f64 = 1e-6;
+
 /// The exposure (a multiplier) that maps the log-average luminance of the
-/// covered pixels to [`KEY`]; 1 when nothing is covered or all is black.
+/// lit pixels (covered, and brighter than [`LIT`] × the brightest) to
+/// [`KEY`]; 1 when nothing is covered or all is black. Only the lit pixels
+/// count: a lit building seen from outside is mostly unlit exterior, whose
+/// black would otherwise drag the average down and turn the visible
+/// interior white.
 pub fn auto_exposure(h: &Hdr) -> f64 {
     let mut sum = 0.0;
     let mut n = 0.0;
@@ -55,7 +65,7 @@ pub fn auto_exposure(h: &Hdr) -> f64 {
     }
     let delta = peak * 1e-4;
     for (i, &l) in lum.iter().enumerate() {
-        if counted(i) {
+        if counted(i) && l > LIT * peak {
             sum += (delta + l).ln();
             n += 1.0;
         }
@@ -298,6 +308,22 @@ mod tests {
         assert!((auto_exposure(&h2) - 0.18).abs() < 1e-4); // δ = 1e-4 of the peak
     }
 
+    /// A lit interior seen through a dark exterior: the unlit pixels do not
+    /// count, so the lit ones are exposed as if alone.
+    #[test]
+    fn auto_exposure_ignores_unlit_pixels() {
+        let alone = auto_exposure(&flat(4, 4, 7.0));
+        let mut h = flat(4, 4, 7.0);
+        for i in 0..12 {
+            h.rgb[i] = [0.0; 3];
+        }
+        let e = auto_exposure(&h);
+        assert!((e - alone).abs() <= 1e-12 * alone, "{e} vs {alone}");
+        // Dim but lit pixels still count.
+        h.rgb[0] = [0.07; 3];
+        assert!(auto_exposure(&h) > alone);
+    }
+
     /// A slightly negative or NaN pixel (MSAA extrapolating a colour past a
     /// sliver's edge) once made the exposure NaN and the picture black.
     #[test]
@@ -306,8 +332,9 @@ mod tests {
         let want = auto_exposure(&h);
         h.rgb[3] = [-1.0; 3];
         h.rgb[5] = [f32::NAN; 3];
+        // They count as unlit: left out, as black pixels are.
         let e = auto_exposure(&h);
-        assert!(e.is_finite() && e > want, "{e} vs {want}");
+        assert!((e - want).abs() <= 1e-12 * want, "{e} vs {want}");
     }
 
     #[test]
