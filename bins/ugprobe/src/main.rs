@@ -442,6 +442,17 @@ fn report(
         s.push_str(&cols.join(sep));
         s.push('\n');
     }
+    // Robust figures too: one point behind a lamp can dominate the rms.
+    let mut abs: Vec<f64> = errors.iter().map(|p| p.error.abs()).collect();
+    abs.sort_by(f64::total_cmp);
+    let quantile = |q: f64| abs[((q * (abs.len() - 1) as f64).round() as usize).min(abs.len() - 1)];
+    let _ = writeln!(
+        s,
+        "# |error|: median {:.2}%, 90th percentile {:.2}%, 99th percentile {:.2}%",
+        100.0 * quantile(0.5),
+        100.0 * quantile(0.9),
+        100.0 * quantile(0.99)
+    );
     let _ = writeln!(
         s,
         "rms {:.2}% max {:.2}% n {} se {:.2}%",
