@@ -133,6 +133,13 @@ struct Args {
     /// Write a black model when nothing emits light, instead of failing.
     #[arg(long)]
     allow_dark: bool,
+    /// Give each vertex made by refinement its exact irradiance from every
+    /// earlier shot (re-shot at it) instead of the mean of its parents'
+    /// (§6): slower, and exact where earlier light is not linear along the
+    /// split edge (a closed furnace is uniform to 1e-4 with it, ±8% without).
+    /// Not after the indirect tail has run.
+    #[arg(long)]
+    regather: bool,
 }
 
 /// `--patch-length`: model units, or a percentage of the diagonal.
@@ -325,6 +332,7 @@ fn main() -> std::process::ExitCode {
             ambient: args.ambient,
             tail: args.tail,
             tail_rays: args.tail_rays,
+            regather: args.regather,
             ..radiosity::Options::default()
         };
         let interrupt = Arc::new(AtomicBool::new(false));
