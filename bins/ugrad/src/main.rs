@@ -255,59 +255,20 @@ fn main() -> std::process::ExitCode {
             optional: hemicube::POINTS_FEATURE,
             ..Default::default()
         };
-        let hc = match args.visibility {
-            VisibilityKind::Ray => None,
-            VisibilityKind::Hemicube => {
-                let g = gpu::open(&request).map_err(|e| {
-                    cli::Failure::runtime(format!("error: --visibility hemicube: {e}"))
-                })?;
-                c.verbose(format!(
-                    "visibility: hemi-cube ({}, {}²) on {}",
-                    hc_opts.method.name(),
-                    args.hemicube_res,
-                    g.describe()
-                ));
-                Some(hemicube::Hemicube::new(g, &mesh, hc_opts).map_err(|e| {
-                    cli::Failure::runtime(format!("error: --visibility hemicube: {e}"))
-                })?)
-            }
-            VisibilityKind::Auto => match gpu::open(&request) {
-                Ok(g) if !g.is_cpu() => match hemicube::Hemicube::new(g, &mesh, hc_opts) {
-                    Ok(h) => {
-                        c.verbose(format!(
-                            "visibility: hemi-cube ({}, {}²) on {}, a hardware GPU (faster than CPU rays)",
-                            hc_opts.method.name(),
-                            args.hemicube_res,
-                            h.describe()
-                        ));
-                        Some(h)
-                    }
-                    Err(e) => {
-                        if !c.quiet {
-                            eprintln!(
-                                "note: hemi-cube unavailable ({e}); visibility by CPU ray casting"
-                            );
-                        }
-                        None
-                    }
-                },
-                Ok(g) => {
-                    c.verbose(format!(
-                        "note: visibility by CPU ray casting (the only GPU adapter, {}, is a software rasteriser; --visibility hemicube uses it anyway)",
-                        g.describe()
-                    ));
-                    None
-                }
-                Err(e) => {
-                    if !c.quiet {
-                        eprintln!(
-                            "note: no GPU for the hemi-cube ({e}); visibility by CPU ray casting"
-                        );
-                    }
-                    None
-                }
-            },
+        let choice = match args.visibility {
+            VisibilityKind::Auto => hemicube::Choice::Auto,
+            VisibilityKind::Ray => hemicube::Choice::Ray,
+            VisibilityKind::Hemicube => hemicube::Choice::Hemicube,
         };
+        let chosen = hemicube::choose(choice, &mesh, &request, hc_opts)
+            .map_err(|e| cli::Failure::runtime(format!("error: {e}")))?;
+        if let Some(d) = chosen.detail {
+            c.verbose(d);
+        }
+        if let (Some(n), false) = (chosen.note, c.quiet) {
+            eprintln!("{n}");
+        }
+        let hc = chosen.hemicube;
         let ray;
         let vis: &dyn radiosity::Visibility = match &hc {
             Some(h) => h,

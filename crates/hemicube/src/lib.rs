@@ -163,6 +163,97 @@ struct Gpus {
     decal: Option<DecalPipes>,
 }
 
+/// How visibility is chosen (`ugrad --visibility`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Choice {
+    /// The hemi-cube on a hardware GPU, else ray casting (on a software
+    /// rasteriser such as lavapipe the CPU ray caster is faster).
+    Auto,
+    /// CPU ray casting (the reference).
+    Ray,
+    /// The hemi-cube on whatever adapter there is; an error without one.
+    Hemicube,
+}
+
+/// What [`choose`] decided: the hemi-cube (`None`: ray casting), a line for
+/// `-v` and a note for stderr (shown unless `-q`).
+pub struct Chosen {
+    pub hemicube: Option<Hemicube>,
+    pub detail: Option<String>,
+    pub note: Option<String>,
+}
+
+/// Opens the GPU and builds the hemi-cube as `choice` asks. Only
+/// [`Choice::Hemicube`] fails (no adapter, or the hemi-cube cannot be
+/// built on it); `Auto` falls back to ray casting with a note.
+pub fn choose(
+    choice: Choice,
+    mesh: &Mesh,
+    request: &gpu::Request,
+    opts: Options,
+) -> Result<Chosen, String> {
+    let ray = |detail: Option<String>, note: Option<String>| Chosen {
+        hemicube: None,
+        detail,
+        note,
+    };
+    match choice {
+        Choice::Ray => Ok(ray(None, None)),
+        Choice::Hemicube => {
+            let g = gpu::open(request).map_err(|e| format!("--visibility hemicube: {e}"))?;
+            let detail = format!(
+                "visibility: hemi-cube ({}, {}²) on {}",
+                opts.method.name(),
+                opts.res,
+                g.describe()
+            );
+            let h =
+                Hemicube::new(g, mesh, opts).map_err(|e| format!("--visibility hemicube: {e}"))?;
+            Ok(Chosen {
+                hemicube: Some(h),
+                detail: Some(detail),
+                note: None,
+            })
+        }
+        Choice::Auto => match gpu::open(request) {
+            Ok(g) if !g.is_cpu() => match Hemicube::new(g, mesh, opts) {
+                Ok(h) => {
+                    let detail = format!(
+                        "visibility: hemi-cube ({}, {}²) on {}, a hardware GPU (faster than CPU rays)",
+                        opts.method.name(),
+                        opts.res,
+                        h.describe()
+                    );
+                    Ok(Chosen {
+                        hemicube: Some(h),
+                        detail: Some(detail),
+                        note: None,
+                    })
+                }
+                Err(e) => Ok(ray(
+                    None,
+                    Some(format!(
+                        "note: hemi-cube unavailable ({e}); visibility by CPU ray casting"
+                    )),
+                )),
+            },
+            Ok(g) => Ok(ray(
+                Some(format!(
+                    "note: visibility by CPU ray casting (the only GPU adapter, {}, is a software rasteriser; --visibility hemicube uses it anyway)",
+                    g.describe()
+                )),
+                None,
+            )),
+            Err(e) => Ok(ray(
+                None,
+                Some(format!(
+                    "note: no GPU for the hemi-cube ({e}); visibility by CPU ray casting"
+                )),
+            )),
+        },
+    }
+}
+
 /// The hemi-cube visibility oracle.
 pub struct Hemicube {
     gpu: Mutex<Gpus>,
