@@ -423,8 +423,8 @@ fn a_building_converges_through_the_indirect_tail() {
     std::fs::write(&path, &input).unwrap();
     let go = |threads: &str| {
         let out = Command::new(bin("ugrad"))
-            // 256 discovery rays (the default is 1024): the test is about
-            // the tail converging a building, and 1024 costs CI 25 s more.
+            // 256 discovery rays (the default is 512): the test is about
+            // the tail converging a building, and more rays cost CI time.
             .args(["-v", "--tail-rays", "256", path.to_str().unwrap()])
             .env("RAYON_NUM_THREADS", threads)
             .output()

@@ -107,7 +107,7 @@ struct Args {
     tail: f64,
     /// Rays from each patch corner that find the patches it sees in the
     /// tail; 0 tries every patch (default: 0 while corners × patches ≤ 4e6,
-    /// else 1024).
+    /// else 512).
     #[arg(long, value_name = "N")]
     tail_rays: Option<usize>,
     /// How visibility is decided. auto: the hemi-cube on a hardware GPU,
