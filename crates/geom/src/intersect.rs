@@ -7,7 +7,7 @@ use glam::{DVec2, DVec3};
 use crate::index::BoxIndex;
 use crate::plane::{Frame, Plane};
 use crate::polygon::{Location, locate_2d};
-use crate::predicates::{on_segment_2d, orient2d};
+use crate::predicates::on_segment_2d;
 
 /// A face prepared for pair tests: contours, best-fit plane and its 2-D
 /// projection; faces with many edges also get an index of their edges, so
@@ -108,11 +108,8 @@ impl FaceGeom {
             if on_segment_2d(q, a, b) {
                 return Location::Boundary;
             }
-            if (a.y > q.y) != (b.y > q.y) {
-                let o = orient2d(a, b, q);
-                if (b.y > a.y && o > 0) || (b.y < a.y && o < 0) {
-                    inside = !inside;
-                }
+            if crate::polygon::crosses_ray(q, a, b) {
+                inside = !inside;
             }
         }
         if inside {

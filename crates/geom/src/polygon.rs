@@ -54,6 +54,17 @@ pub enum Location {
     Boundary,
 }
 
+/// Whether the edge a→b crosses the ray from `p` towards +x: the half-open
+/// rule on y, the side decided exactly (an edge going up crosses when `p`
+/// is left of it). The step of every even-odd point location.
+pub fn crosses_ray(p: DVec2, a: DVec2, b: DVec2) -> bool {
+    if (a.y > p.y) == (b.y > p.y) {
+        return false;
+    }
+    let o = orient2d(a, b, p);
+    (b.y > a.y && o > 0) || (b.y < a.y && o < 0)
+}
+
 /// Exact point-in-polygon test (even-odd over all contours) with exact boundary detection.
 pub fn locate_2d(p: DVec2, contours: &[Vec<DVec2>]) -> Location {
     let mut inside = false;
@@ -65,13 +76,8 @@ pub fn locate_2d(p: DVec2, contours: &[Vec<DVec2>]) -> Location {
             if on_segment_2d(p, a, b) {
                 return Location::Boundary;
             }
-            // Half-open rule on y; the crossing side decided exactly.
-            if (a.y > p.y) != (b.y > p.y) {
-                let o = orient2d(a, b, p);
-                // Edge going up: p left of it means the ray to +x crosses it.
-                if (b.y > a.y && o > 0) || (b.y < a.y && o < 0) {
-                    inside = !inside;
-                }
+            if crosses_ray(p, a, b) {
+                inside = !inside;
             }
         }
     }

@@ -1642,21 +1642,12 @@ fn inside_loop(outer: &[DVec3], inner: &[DVec3]) -> bool {
         2
     };
     let flat = |p: DVec3| match axis {
-        0 => (p.y, p.z),
-        1 => (p.z, p.x),
-        _ => (p.x, p.y),
+        0 => geom::DVec2::new(p.y, p.z),
+        1 => geom::DVec2::new(p.z, p.x),
+        _ => geom::DVec2::new(p.x, p.y),
     };
-    let poly: Vec<(f64, f64)> = outer.iter().map(|&p| flat(p)).collect();
-    let contains = |(x, y): (f64, f64)| {
-        let mut odd = false;
-        for i in 0..poly.len() {
-            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-            if (a.1 > y) != (b.1 > y) && x < a.0 + (y - a.1) / (b.1 - a.1) * (b.0 - a.0) {
-                odd = !odd;
-            }
-        }
-        odd
-    };
+    let poly = [outer.iter().map(|&p| flat(p)).collect::<Vec<_>>()];
+    let contains = |q| geom::locate_2d(q, &poly) == geom::Location::Inside;
     let k = inner.len();
     let votes = (0..k)
         .filter(|&i| contains(flat((inner[i] + inner[(i + 1) % k]) / 2.0)))
