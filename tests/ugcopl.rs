@@ -12,6 +12,21 @@ fn count(r: &serde_json::Value, key: &str) -> usize {
     r[key].as_array().unwrap().len()
 }
 
+fn defects(r: &serde_json::Value) -> usize {
+    [
+        "nonplanar",
+        "tvertices",
+        "intersecting",
+        "overlapping",
+        "coincident",
+        "degenerate",
+        "inconsistent",
+    ]
+    .iter()
+    .map(|k| count(r, k))
+    .sum()
+}
+
 fn areas(r: &serde_json::Value) -> Vec<(String, f64)> {
     r["area_by_material"]
         .as_array()
@@ -127,9 +142,105 @@ fn models_without_coplanar_overlaps_pass_through() {
     ] {
         let p = fixture(name);
         assert_eq!(
-            run_ok("ugcopl", &[p.to_str().unwrap()], None),
+            run_ok("ugcopl", &["--contact", "0", p.to_str().unwrap()], None),
             run_ok("ugcat", &[p.to_str().unwrap()], None),
             "{name}"
         );
     }
+}
+
+/// A ceiling (facing down) and the faces hung a hair below it.
+fn lamp_model(panel: &str) -> String {
+    format!(
+        "c_rgb white 0.7 0.7 0.7;
+defmat light; diffuse_rgb 0.8 0.8 0.8; emission_rgb 10 10 10; end;
+v c0 0 0 3; v c1 0 10 3; v c2 10 10 3; v c3 10 0 3;
+f ceiling (c0 c1 c2 c3) white;
+v l0 4 4 2.99; v l1 4 6 2.99; v l2 6 6 2.99; v l3 6 4 2.99;
+f lamp (l0 l1 l2 l3) light;
+{panel}"
+    )
+}
+
+#[test]
+fn contact_cuts_follow_a_lamp_hung_below_the_ceiling() {
+    let src = lamp_model("");
+    let cut = run_ok("ugcopl", &[], Some(src.as_bytes()));
+    let m = ug::parse(cut.as_bytes(), "<cut>").unwrap().model;
+    let ceiling: Vec<_> = m
+        .faces
+        .iter()
+        .filter(|f| f.name.as_deref().is_some_and(|n| n.starts_with("ceiling")))
+        .collect();
+    // The ceiling with a hole where the lamp covers it, and the covered square.
+    let mut contours: Vec<usize> = ceiling.iter().map(|f| f.contours.len()).collect();
+    contours.sort_unstable();
+    assert_eq!(contours, [1, 2], "{cut}");
+    let island = ceiling.iter().find(|f| f.contours.len() == 1).unwrap();
+    let mut corners: Vec<[f64; 3]> = island.contours[0]
+        .iter()
+        .map(|&v| m.vertices[v.idx()].pos.to_array())
+        .collect();
+    corners.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    // In the ceiling's plane (not the lamp's), under the lamp's outline.
+    assert_eq!(
+        corners,
+        [
+            [4.0, 4.0, 3.0],
+            [4.0, 6.0, 3.0],
+            [6.0, 4.0, 3.0],
+            [6.0, 6.0, 3.0]
+        ]
+    );
+    // The lamp (its back faces the ceiling) is not cut; nothing is lost.
+    assert_eq!(
+        m.faces
+            .iter()
+            .filter(|f| f.name.as_deref() == Some("lamp"))
+            .count(),
+        1
+    );
+    let r = check(&cut);
+    assert_eq!(defects(&r), 0, "{r}");
+    let before = check(&src);
+    for ((ma, a), (mb, b)) in areas(&before).iter().zip(areas(&r).iter()) {
+        assert_eq!(ma, mb);
+        assert!((a - b).abs() < 1e-9 * a.max(1.0), "{ma}: {a} vs {b}");
+    }
+    // ugclean keeps both pieces (they are not coincident with anything).
+    let cleaned = run_ok("ugclean", &[], Some(cut.as_bytes()));
+    assert_eq!(areas(&check(&cleaned)), areas(&r));
+    // --contact 0, or a gap larger than the contact distance: no cut.
+    for args in [&["--contact", "0"][..], &["--contact", "0.005"][..]] {
+        assert_eq!(
+            run_ok("ugcopl", args, Some(src.as_bytes())),
+            run_ok("ugcat", &[], Some(src.as_bytes())),
+            "{args:?}"
+        );
+    }
+}
+
+#[test]
+fn contact_cuts_leave_faces_that_straddle_an_edge_or_face_away() {
+    // A panel across the ceiling's edge, and one above the ceiling (behind
+    // its back): neither cuts it.
+    let src = lamp_model(
+        "v p0 8 2 2.995; v p1 8 4 2.995; v p2 12 4 2.995; v p3 12 2 2.995;
+f panel (p0 p1 p2 p3) white;
+v q0 1 1 3.005; v q1 1 2 3.005; v q2 2 2 3.005; v q3 2 1 3.005;
+f above (q0 q1 q2 q3) white;",
+    );
+    let cut = run_ok("ugcopl", &[], Some(src.as_bytes()));
+    let m = ug::parse(cut.as_bytes(), "<cut>").unwrap().model;
+    let names: Vec<&str> = m.faces.iter().filter_map(|f| f.name.as_deref()).collect();
+    // Only the lamp cuts the ceiling: two ceiling pieces, the rest whole.
+    assert_eq!(
+        names.iter().filter(|n| n.starts_with("ceiling")).count(),
+        2,
+        "{names:?}"
+    );
+    for whole in ["lamp", "panel", "above"] {
+        assert!(names.contains(&whole), "{whole} in {names:?}");
+    }
+    assert_eq!(defects(&check(&cut)), 0);
 }

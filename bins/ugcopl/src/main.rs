@@ -6,7 +6,9 @@ const EXAMPLES: &str = "\
 Examples:
   ugcopl < in.ug | ugclean > clean.ug      cut overlaps, then drop the hidden copies
   ugvlmerge < in.ug | ugisect | ugcopl | ugclean | ugcut -l 2
-  ugcopl -v -e 0.001 model.ug -o cut.ug";
+  ugcopl -v -e 0.001 model.ug -o cut.ug
+  ugcopl --contact 0 model.ug > cut.ug       no contact cuts (coplanar overlaps only)
+  ugcopl --contact 5 model.ug > cut.ug       cut behind faces up to 5 units in front";
 
 /// Intersect coplanar, overlapping faces (either orientation) in their plane
 /// so that every overlap region becomes a face of its own in each face it
@@ -15,6 +17,13 @@ Examples:
 /// annotation {ugcopl origin NAME area A} that ugclean reads. Points where
 /// cuts meet neighbouring edges are inserted there (no T-vertex). Instances
 /// are flattened first.
+///
+/// Contact cuts: a face is also cut along the outline of a parallel face
+/// lying a small gap in front of it (a lamp a hair below the ceiling, a
+/// rug, a picture, a cupboard against a wall), so that the dark part behind
+/// it becomes pieces of its own instead of being interpolated from lit
+/// corners. Only the face whose front faces the other is cut, in its own
+/// plane; ugclean keeps these pieces.
 #[derive(Parser, Debug)]
 #[command(version, after_help = EXAMPLES)]
 struct Args {
@@ -23,16 +32,23 @@ struct Args {
     /// Distance tolerance in model units (default: 1e-6 of the bounding-box diagonal).
     #[arg(short = 'e', long = "epsilon", value_parser = cli::parse_epsilon)]
     epsilon: Option<f64>,
+    /// Largest gap for contact cuts, in model units (default: 1e-3 of the
+    /// bounding-box diagonal; 0 turns them off).
+    #[arg(long = "contact", value_name = "GAP", value_parser = cli::parse_epsilon)]
+    contact: Option<f64>,
 }
 
 fn main() -> std::process::ExitCode {
     let args = Args::parse();
     let c = &args.common;
     cli::filter(c, args.epsilon, |model, eps| {
-        let (out, st) = clean::copl::copl(&model, eps)?;
+        let contact = args
+            .contact
+            .unwrap_or_else(|| clean::copl::default_contact(&model));
+        let (out, st) = clean::copl::copl_contact(&model, eps, contact)?;
         c.verbose(format!(
-            "epsilon {eps:e}; {} overlapping pairs; {} faces cut into {} pieces; {} new vertices; {} T-vertices inserted",
-            st.pairs, st.faces_cut, st.pieces, st.new_vertices, st.tvertices
+            "epsilon {eps:e}; contact gap {contact:e}; {} overlapping pairs; {} contact pairs; {} faces cut into {} pieces; {} new vertices; {} T-vertices inserted",
+            st.pairs, st.contacts, st.faces_cut, st.pieces, st.new_vertices, st.tvertices
         ));
         Ok(out)
     })

@@ -19,6 +19,22 @@
 //! remove the piece of the larger surface. Finally vertices within epsilon
 //! are merged and the points where the cuts meet neighbouring faces' edges
 //! are inserted into those edges, so no T-vertex is left.
+//!
+//! **Contact cuts.** A face may also be cut along the outline of a
+//! parallel face lying a small gap in front of it (more than the coplanar
+//! tolerance, at most `contact`): a lamp hung a hair below the ceiling, a
+//! rug on the floor, a picture on the wall, a cupboard pushed against a
+//! wall. The part of the face behind such a face sits in a slit that light
+//! hardly reaches, and unless the face is cut along the covering face's
+//! outline its patches interpolate lit corners across the dark part (on the
+//! Cornell box, whose lamp hangs 0.1 mm below the ceiling, the ceiling behind
+//! the lamp came out at 7% of the lamp's surroundings where the reference is
+//! 0, and the ceiling next to the lamp 6% dark). Only a face whose **front**
+//! faces the other is cut (what is behind a face's back is never seen), and
+//! only in its own plane: the covering face's contours are projected onto
+//! it as fresh points, so the pieces stay planar and no vertex is shared
+//! across the gap. The pieces are ordinary `ugcopl` pieces; they are not
+//! coincident with anything, so `ugclean` keeps them.
 
 use check::PairKind;
 use geom::arrange::Tag;
@@ -35,21 +51,169 @@ pub struct Stats {
     pub pieces: usize,
     pub new_vertices: usize,
     pub tvertices: usize,
+    /// Contact pairs (a face and a parallel face a small gap in front of it).
+    pub contacts: usize,
 }
 
-/// Cuts the coplanar overlapping faces of a flat model.
+/// The default contact gap: this fraction of the model's bounding-box
+/// diagonal (about 1 mm in a 1 m scene, 2 cm across a 20 m building).
+pub const RELATIVE_CONTACT: f64 = 1e-3;
+
+/// [`RELATIVE_CONTACT`] times the model's bounding-box diagonal (0 for an
+/// empty model).
+pub fn default_contact(m: &Model) -> f64 {
+    match m.bounds() {
+        Some((lo, hi)) => RELATIVE_CONTACT * (hi - lo).length(),
+        None => 0.0,
+    }
+}
+
+/// Cuts the coplanar overlapping faces of a flat model (no contact cuts).
 pub fn copl(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
+    copl_contact(m, eps, 0.0)
+}
+
+/// Most cosine between two faces' normals for a contact pair: within
+/// about 2.6° of parallel (a lamp, rug or picture lies flat on its face).
+const CONTACT_PARALLEL: f64 = 0.999;
+
+/// The contact pairs `(k, j)`: face `j` lies entirely in front of face
+/// `k`, more than the coplanar tolerance and at most `gap` from its plane,
+/// the two nearly parallel and their boxes overlapping within `gap`. Face
+/// `k` is the one to cut. In face order, then `j` ascending.
+fn contact_pairs(
+    geoms: &[Option<geom::intersect::FaceGeom>],
+    eps: f64,
+    gap: f64,
+) -> Vec<(usize, usize)> {
+    let tol = geom::intersect::COPLANAR_EPSILONS * eps;
+    if gap <= tol {
+        return Vec::new();
+    }
+    let boxes: Vec<(geom::DVec3, geom::DVec3, u32)> = geoms
+        .iter()
+        .enumerate()
+        .filter_map(|(k, g)| {
+            g.as_ref().map(|g| {
+                let (lo, hi) = g.bounds();
+                (lo, hi, k as u32)
+            })
+        })
+        .collect();
+    let index = geom::index::BoxIndex::new(boxes.iter().copied());
+    let per: Vec<Vec<(usize, usize)>> = boxes
+        .par_iter()
+        .map(|&(lo, hi, k)| {
+            let gk = geoms[k as usize]
+                .as_ref()
+                .expect("indexed faces have geometry");
+            let pad = geom::DVec3::splat(gap);
+            let mut out = Vec::new();
+            for j in index.query(lo - pad, hi + pad) {
+                if j == k {
+                    continue;
+                }
+                let gj = geoms[j as usize]
+                    .as_ref()
+                    .expect("indexed faces have geometry");
+                if gk.plane.n.dot(gj.plane.n).abs() < CONTACT_PARALLEL {
+                    continue;
+                }
+                let in_gap = gj.contours.iter().flatten().all(|&p| {
+                    let d = gk.plane.dist(p);
+                    d > tol && d <= gap
+                });
+                if in_gap && covers_inside(gk, gj, eps) {
+                    out.push((k as usize, j as usize));
+                }
+            }
+            out
+        })
+        .collect();
+    per.into_iter().flatten().collect()
+}
+
+/// Whether `j` projected onto `k`'s plane lies strictly inside `k`: every
+/// vertex of `j` more than a few epsilons inside `k`, and no contour of `k`
+/// reaching into `j` (no vertex of `k` in or on `j`, no edges touching).
+/// Only then is `k` cut along `j`'s outline: the cut makes no vertex on
+/// `k`'s boundary, so no neighbour gains a T-vertex and orientation across
+/// `k`'s edges is untouched. A covering face that straddles `k`'s edge (a
+/// cupboard across two wall pieces) is left alone.
+fn covers_inside(gk: &geom::intersect::FaceGeom, gj: &geom::intersect::FaceGeom, eps: f64) -> bool {
+    use geom::polygon::Location;
+    let margin = 4.0 * eps;
+    if !gj
+        .contours
+        .iter()
+        .flatten()
+        .all(|&p| gk.locate(p, margin) == Location::Inside)
+    {
+        return false;
+    }
+    let j2: Vec<Vec<geom::DVec2>> = gj
+        .contours
+        .iter()
+        .map(|c| c.iter().map(|&p| gk.frame.to_2d(p)).collect())
+        .collect();
+    let (mut jlo, mut jhi) = (
+        geom::DVec2::splat(f64::INFINITY),
+        geom::DVec2::splat(f64::NEG_INFINITY),
+    );
+    for &p in j2.iter().flatten() {
+        jlo = jlo.min(p);
+        jhi = jhi.max(p);
+    }
+    let pad = geom::DVec2::splat(margin);
+    for c in &gk.contours_2d {
+        let (mut lo, mut hi) = (
+            geom::DVec2::splat(f64::INFINITY),
+            geom::DVec2::splat(f64::NEG_INFINITY),
+        );
+        for &p in c {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        if !(lo.cmple(jhi + pad).all() && hi.cmpge(jlo - pad).all()) {
+            continue;
+        }
+        for i in 0..c.len() {
+            let (a, bb) = (c[i], c[(i + 1) % c.len()]);
+            if geom::intersect::locate_eps(a, &j2, margin) != Location::Outside {
+                return false;
+            }
+            for jc in &j2 {
+                for t in 0..jc.len() {
+                    let (p, q) = (jc[t], jc[(t + 1) % jc.len()]);
+                    if geom::predicates::segments_2d(a, bb, p, q)
+                        != geom::predicates::SegmentContact::None
+                    {
+                        return false;
+                    }
+                }
+            }
+        }
+    }
+    true
+}
+
+/// Cuts the coplanar overlapping faces of a flat model, and cuts each face
+/// along the outlines of the parallel faces lying at most `contact` in
+/// front of it (see the module's "Contact cuts"; 0: none).
+pub fn copl_contact(m: &Model, eps: f64, contact: f64) -> Result<(Model, Stats), ug::Diagnostic> {
     let (faces, geoms) = face_geoms(m);
     let pairs: Vec<(usize, usize)> = check::coplanar_pairs(&geoms, eps)
         .into_iter()
         .filter(|p| matches!(p.2, PairKind::Overlap(_)))
         .map(|(i, j, _)| (i, j))
         .collect();
+    let contacts = contact_pairs(&geoms, eps, contact);
     let mut stats = Stats {
         pairs: pairs.len(),
+        contacts: contacts.len(),
         ..Stats::default()
     };
-    if pairs.is_empty() {
+    if pairs.is_empty() && contacts.is_empty() {
         return Ok((m.clone(), stats));
     }
     let mut others: Vec<Vec<usize>> = vec![Vec::new(); faces.len()];
@@ -57,9 +221,13 @@ pub fn copl(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
         others[i].push(j);
         others[j].push(i);
     }
+    let mut covers: Vec<Vec<usize>> = vec![Vec::new(); faces.len()];
+    for &(k, j) in &contacts {
+        covers[k].push(j);
+    }
     let pos = |v: ug::VertexId| m.vertices[v.idx()].pos;
     let work: Vec<usize> = (0..faces.len())
-        .filter(|&k| !others[k].is_empty())
+        .filter(|&k| !others[k].is_empty() || !covers[k].is_empty())
         .collect();
     let results: Vec<(usize, Vec<Vec<Vec<Point>>>)> = work
         .par_iter()
@@ -91,6 +259,17 @@ pub fn copl(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
                     } else {
                         layout.ring(&winged::pieces::clip_ring(&ring, lo, hi), tag);
                     }
+                }
+            }
+            // Covering faces in front: their contours projected onto this
+            // face's plane as fresh points (never their vertices, which lie
+            // across the gap).
+            for (t, &j) in covers[k].iter().enumerate() {
+                let tag = Tag::Toggle((others[k].len() + t) as u32 + 1);
+                for c in &m.faces[faces[j].idx()].contours {
+                    let ring: Vec<(geom::DVec2, Option<ug::VertexId>)> =
+                        c.iter().map(|&v| (g.frame.to_2d(pos(v)), None)).collect();
+                    layout.ring(&winged::pieces::clip_ring(&ring, lo, hi), tag);
                 }
             }
             let arr = layout.arrange(eps, false);

@@ -218,16 +218,22 @@ impl Layout {
     }
 
     /// The loops of an arrangement face as points: input points are their
-    /// vertices (merged ones their representative's), the others new
-    /// points in 3-D (on the frame's plane).
+    /// vertices (merged ones their representative's), the others (and input
+    /// points given without a vertex) new points in 3-D (on the frame's
+    /// plane).
     pub fn loops(&self, arr: &Arrangement, face: &geom::arrange::Face) -> Vec<Vec<Point>> {
         face.loops
             .iter()
             .map(|l| {
                 l.iter()
                     .map(|&k| {
-                        if (k as usize) < arr.inputs {
-                            Point::Vertex(self.ids[arr.rep[k as usize] as usize])
+                        let id = if (k as usize) < arr.inputs {
+                            self.ids[arr.rep[k as usize] as usize]
+                        } else {
+                            VertexId(u32::MAX)
+                        };
+                        if id.0 != u32::MAX {
+                            Point::Vertex(id)
                         } else {
                             Point::New(self.frame.to_3d(arr.points[k as usize]))
                         }
