@@ -20,8 +20,10 @@
 //!
 //! H at a point is estimated by paths: at every vertex of a path the light
 //! arriving straight from the emitters is sampled (an emitter triangle
-//! chosen in proportion to its emitted power, a uniform point on it, a
-//! shadow ray), then the path continues in a cosine-distributed direction;
+//! chosen in proportion to a bound of its unoccluded irradiance at the
+//! vertex, a uniform point on it, a shadow ray, divided by the
+//! probability of the choice), then the path continues in a
+//! cosine-distributed direction;
 //! when it reaches the front of a face its throughput is multiplied by that
 //! face's ρ (and the face's own emission is *not* added: it was counted by
 //! the next-event estimate of the vertex before, so nothing is counted
@@ -31,9 +33,27 @@
 //! independent sample of B = E + ρ H; the estimate is their mean and the
 //! standard error their standard deviation over √N.
 //!
+//! The choice of emitter (module `lights`): every emitter triangle gets
+//! the weight E × area × cos θ_x × cos θ_e / (π d²) toward its centroid,
+//! the cosines widened to bounds over the whole triangle (at least 0.05),
+//! d² at least the triangle's radius², the form factor at most 1; zero only
+//! when the whole triangle is behind the vertex's tangent plane or the
+//! vertex behind the triangle, so every triangle that can contribute keeps
+//! a positive probability and the estimate stays unbiased. Occlusion is
+//! not known: a lamp in the next room keeps its weight, but in a building
+//! the lamps of the vertex's own room, near it and facing it, get most of
+//! the choices, where choosing by emitted power spent nearly all of them on
+//! the other rooms' lamps (the standard error at 4,096 paths on a 10k-face
+//! building with 442 ceiling lights: 31% by power, 2.7% now). Up to 96
+//! emitter triangles all are weighed at every vertex; above, a binary tree
+//! over them (a box, a cone of normals and the power per node) is
+//! descended from the root, one child at a time in proportion to a bound of
+//! what it holds, in O(log emitters).
+//!
 //! Every point has its own random stream, derived from (seed, point index),
 //! so results do not depend on the number of threads.
 
+mod lights;
 pub mod lit;
 pub mod points;
 pub mod rng;
@@ -43,6 +63,7 @@ use std::ops::Range;
 
 use geom::bvh::{Bvh, Triangle};
 use glam::DVec3;
+use lights::{Light, LightTree, Selection};
 use rayon::prelude::*;
 use ug::Model;
 
@@ -194,6 +215,12 @@ pub struct Scene {
     emitters: Vec<u32>,
     /// Cumulative emitter weights (Σ|E| × area); the last is the total.
     cdf: Vec<f64>,
+    /// What next-event estimation needs of each emitter, as `emitters`.
+    lights: Vec<Light>,
+    /// A binary tree over `lights`, for [`Selection::Tree`].
+    tree: LightTree,
+    /// How next-event estimation chooses an emitter triangle.
+    selection: Selection,
     /// Ray origins are moved this far along their surface's normal.
     offset: f64,
     diagonal: f64,
@@ -321,16 +348,21 @@ impl Scene {
         }
         let mut emitters = Vec::new();
         let mut cdf = Vec::new();
+        let mut lights = Vec::new();
         let mut total = 0.0;
         for (i, t) in tris.iter().enumerate() {
             let e = faces[t.face as usize].emission;
-            let w = (e[0].abs() + e[1].abs() + e[2].abs()) * t.area;
+            let exitance = e[0].abs() + e[1].abs() + e[2].abs();
+            let w = exitance * t.area;
             if w > 0.0 && w.is_finite() {
                 total += w;
                 emitters.push(i as u32);
                 cdf.push(total);
+                lights.push(Light::new(t, exitance));
             }
         }
+        let selection = Selection::for_count(lights.len());
+        let tree = LightTree::new(&lights);
         let bvh = Bvh::new(
             tris.iter()
                 .enumerate()
@@ -346,6 +378,9 @@ impl Scene {
             bvh,
             emitters,
             cdf,
+            lights,
+            tree,
+            selection,
             offset: if diag > 0.0 { 1e-6 * diag } else { 1e-9 },
             diagonal: diag,
             skipped,
@@ -471,9 +506,12 @@ impl Scene {
         let mut acc = Welford::default();
         let n = r.normal.normalize_or_zero();
         let batch = opts.samples.max(1);
+        // Scratch for the cumulative weights of the emitters (one per call:
+        // nothing shared between threads).
+        let mut cum = Vec::new();
         loop {
             for _ in 0..batch {
-                let h = self.path(r.point, n, opts, &mut rng);
+                let h = self.path(r.point, n, opts, &mut rng, &mut cum);
                 let b = [0, 1, 2].map(|c| r.emission[c] + r.rho[c] * h[c]);
                 acc.add([b[0], b[1], b[2], luminance(b)]);
             }
@@ -516,12 +554,12 @@ impl Scene {
     }
 
     /// One path from `x` (front normal `n`): a sample of the irradiance H.
-    fn path(&self, x: DVec3, n: DVec3, opts: &Options, rng: &mut Rng) -> Rgb {
+    fn path(&self, x: DVec3, n: DVec3, opts: &Options, rng: &mut Rng, cum: &mut Vec<f64>) -> Rgb {
         let mut h = [0.0; 3];
         let mut t = [1.0; 3];
         let (mut x, mut n) = (x, n);
         for depth in 0..opts.max_depth {
-            let d = self.direct(x, n, rng);
+            let d = self.direct(x, n, rng, cum);
             for c in 0..3 {
                 h[c] += t[c] * d[c];
             }
@@ -559,16 +597,51 @@ impl Scene {
 
     /// One next-event sample of the irradiance at `x` (front normal `n`)
     /// straight from the emitters: E_e cosθ_x cosθ_e / (π r²) / pdf, pdf =
-    /// P(triangle) / area, P ∝ Σ|E| × area.
-    fn direct(&self, x: DVec3, n: DVec3, rng: &mut Rng) -> Rgb {
-        let Some(&total) = self.cdf.last() else {
+    /// P(triangle) / area, P as [`Scene::selection`] says: ∝ Σ|E| × area
+    /// ([`Selection::Power`]), ∝ [`Light::weight`] at `x` among all
+    /// ([`Selection::Flat`]; `cum` is scratch for the cumulative weights) or
+    /// by the light tree ([`Selection::Tree`]). P is positive for every
+    /// triangle that can contribute, so the estimate is unbiased.
+    fn direct(&self, x: DVec3, n: DVec3, rng: &mut Rng, cum: &mut Vec<f64>) -> Rgb {
+        if self.lights.is_empty() {
             return [0.0; 3];
+        }
+        let o = x + n * self.offset;
+        let (k, p) = match self.selection {
+            Selection::Power => {
+                let total = self.cdf[self.cdf.len() - 1];
+                let k = pick(&self.cdf, rng.f64() * total);
+                let l = &self.lights[k];
+                (k, l.power() / total)
+            }
+            Selection::Flat => {
+                cum.clear();
+                let mut total = 0.0;
+                for l in &self.lights {
+                    total += l.weight(o, n);
+                    cum.push(total);
+                }
+                if !(total > 0.0 && total.is_finite()) {
+                    // No emitter can reach x (every weight is zero only
+                    // where the contribution is zero).
+                    return [0.0; 3];
+                }
+                let k = pick(cum, rng.f64() * total);
+                // The probability of k is the length of its interval.
+                let below = if k > 0 { cum[k - 1] } else { 0.0 };
+                (k, (cum[k] - below) / total)
+            }
+            Selection::Tree => match self.tree.pick(&self.lights, o, n, rng) {
+                Some(kp) => kp,
+                None => return [0.0; 3],
+            },
         };
-        let k = pick(&self.cdf, rng.f64() * total);
+        if p <= 0.0 || p.is_nan() {
+            return [0.0; 3];
+        }
         let ti = self.emitters[k];
         let tri = &self.tris[ti as usize];
         let y = uniform_on(&tri.p, rng);
-        let o = x + n * self.offset;
         let w = y - o;
         let r2 = w.length_squared();
         let r = r2.sqrt();
@@ -588,8 +661,7 @@ impl Scene {
             return [0.0; 3];
         }
         let e = self.faces[tri.face as usize].emission;
-        let weight = (e[0].abs() + e[1].abs() + e[2].abs()) * tri.area;
-        let g = cx * ce / (PI * r2) * total / weight * tri.area;
+        let g = cx * ce / (PI * r2) * tri.area / p;
         e.map(|v| v * g)
     }
 }
@@ -783,5 +855,171 @@ mod tests {
         let e = [DVec3::ZERO, DVec3::X];
         assert!((segment_distance(DVec3::new(0.5, 2.0, 0.0), &e) - 2.0).abs() < 1e-15);
         assert!((segment_distance(DVec3::new(-3.0, 4.0, 0.0), &e) - 5.0).abs() < 1e-15);
+    }
+
+    /// A UG quadrilateral `name` with corners `c` (in order around it),
+    /// written so that its front faces `front`.
+    fn quad(out: &mut String, name: &str, c: [DVec3; 4], front: DVec3, mat: &str) {
+        let c = if geom::newell_normal(&c).dot(front) > 0.0 {
+            c
+        } else {
+            [c[3], c[2], c[1], c[0]]
+        };
+        for (i, p) in c.iter().enumerate() {
+            out.push_str(&format!("v {name}{i} {} {} {};\n", p.x, p.y, p.z));
+        }
+        out.push_str(&format!(
+            "f {name} ({name}0 {name}1 {name}2 {name}3) {mat};\n"
+        ));
+    }
+
+    /// The closed box `lo`..`hi` of material `mat`, every face facing inward.
+    fn room(out: &mut String, name: &str, lo: DVec3, hi: DVec3, mat: &str) {
+        for axis in 0..3 {
+            for side in 0..2 {
+                let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+                let mut c = [DVec3::ZERO; 4];
+                for (i, (a, b)) in [(0, 0), (1, 0), (1, 1), (0, 1)].into_iter().enumerate() {
+                    c[i][axis] = if side == 0 { lo[axis] } else { hi[axis] };
+                    c[i][u] = if a == 0 { lo[u] } else { hi[u] };
+                    c[i][v] = if b == 0 { lo[v] } else { hi[v] };
+                }
+                let mut inward = DVec3::ZERO;
+                inward[axis] = if side == 0 { 1.0 } else { -1.0 };
+                quad(out, &format!("{name}w{axis}{side}"), c, inward, mat);
+            }
+        }
+    }
+
+    /// A square lamp of side `s` centred at `c`, facing down.
+    fn lamp(out: &mut String, name: &str, c: DVec3, s: f64) {
+        let h = s / 2.0;
+        let corners = [(-h, -h), (h, -h), (h, h), (-h, h)].map(|(x, y)| c + DVec3::new(x, y, 0.0));
+        quad(out, name, corners, -DVec3::Z, "lamp");
+    }
+
+    /// Two closed rooms side by side: a small one with one lamp, and a long
+    /// one with twenty lamps that together emit eighteen times as much. No
+    /// light of the long room reaches the small one, but the power
+    /// distribution spends 18/19 of its choices there.
+    fn two_rooms() -> Scene {
+        let mut s = String::from(
+            "c_rgb wall 0.6 0.5 0.4;\n\
+             defmat lamp; diffuse_rgb 0 0 0; emission_rgb 10 10 10; end;\n",
+        );
+        room(&mut s, "a", DVec3::ZERO, DVec3::new(2.0, 2.0, 2.0), "wall");
+        lamp(&mut s, "la", DVec3::new(1.0, 1.0, 1.98), 0.5);
+        room(
+            &mut s,
+            "b",
+            DVec3::new(2.5, 0.0, 0.0),
+            DVec3::new(12.5, 2.0, 2.0),
+            "wall",
+        );
+        for i in 0..20 {
+            let c = DVec3::new(2.75 + 0.5 * i as f64, 0.5 + (i % 2) as f64, 1.98);
+            lamp(&mut s, &format!("lb{i}"), c, 0.45);
+        }
+        let m = ug::parse(s.as_bytes(), "two-rooms.ug")
+            .expect("parses")
+            .model;
+        Scene::new(&m).expect("a scene")
+    }
+
+    #[test]
+    fn choosing_lamps_by_their_contribution_agrees_with_the_power_distribution_at_a_smaller_error()
+    {
+        let mut s = two_rooms();
+        assert_eq!(s.lights.len(), 42);
+        assert_eq!(s.selection, Selection::Flat);
+        let opts = Options {
+            samples: 40_000,
+            ..Options::default()
+        };
+        let mut run = |sel: Selection, p: DVec3, n: DVec3, stream: u64| {
+            s.selection = sel;
+            let at = s.locate(p, n, 1e-9).expect("on a face");
+            s.estimate(&s.receiver(&at), &opts, stream)
+        };
+        for (k, (p, n)) in [
+            (DVec3::new(0.6, 1.3, 0.0), DVec3::Z),
+            (DVec3::new(2.0, 0.4, 1.5), -DVec3::X),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let power = run(Selection::Power, p, n, 3 * k as u64);
+            for (i, sel) in [Selection::Flat, Selection::Tree].into_iter().enumerate() {
+                let e = run(sel, p, n, 3 * k as u64 + 1 + i as u64);
+                println!(
+                    "{p} {sel:?}: {} ± {} against the power distribution's {} ± {}",
+                    e.y, e.se_y, power.y, power.se_y
+                );
+                let combined = (e.se_y * e.se_y + power.se_y * power.se_y).sqrt();
+                assert!(
+                    (e.y - power.y).abs() <= 3.0 * combined,
+                    "{sel:?} at {p}: {} vs {} ({:.2} combined standard errors)",
+                    e.y,
+                    power.y,
+                    (e.y - power.y).abs() / combined
+                );
+                assert!(
+                    e.se_y <= 0.5 * power.se_y,
+                    "{sel:?} at {p}: standard error {} against {}",
+                    e.se_y,
+                    power.se_y
+                );
+            }
+        }
+    }
+
+    /// Every selection in a closed furnace (every triangle emits, each
+    /// sees the others at every angle): B = E / (1 − ρ) within 3 standard
+    /// errors and 1%. Path vertices near an edge see the next face's 1/r²
+    /// up close, so every selection is heavy-tailed here (the standard error
+    /// of a few thousand paths is itself uncertain, and the mean a little
+    /// more often low than high): hence the 1%, ρ = 0.3 and the points at
+    /// the middles of faces.
+    #[test]
+    fn every_selection_gives_the_furnace_e_over_one_minus_rho() {
+        let mut src =
+            String::from("defmat glow; diffuse_rgb 0.3 0.3 0.3; emission_rgb 0.7 1.4 0.35; end;\n");
+        room(
+            &mut src,
+            "f",
+            DVec3::ZERO,
+            DVec3::new(1.0, 1.5, 1.0),
+            "glow",
+        );
+        let m = ug::parse(src.as_bytes(), "furnace.ug")
+            .expect("parses")
+            .model;
+        let mut s = Scene::new(&m).expect("a scene");
+        let opts = Options {
+            samples: 16384,
+            ..Options::default()
+        };
+        let want = [1.0, 2.0, 0.5];
+        for sel in [Selection::Power, Selection::Flat, Selection::Tree] {
+            s.selection = sel;
+            for (k, (p, n)) in [
+                (DVec3::new(0.5, 0.5, 0.0), DVec3::Z),
+                (DVec3::new(0.4, 1.0, 1.0), -DVec3::Z),
+                (DVec3::new(0.0, 0.75, 0.5), DVec3::X),
+            ]
+            .into_iter()
+            .enumerate()
+            {
+                let at = s.locate(p, n, 1e-9).expect("on a face");
+                let e = s.estimate(&s.receiver(&at), &opts, k as u64);
+                for (c, &w) in want.iter().enumerate() {
+                    let (b, se) = (e.b[c], e.se[c]);
+                    assert!(
+                        (b - w).abs() <= 3.0 * se + 0.01 * w && se < 0.05 * w,
+                        "{sel:?} at {p}, channel {c}: {b} ± {se} against {w}"
+                    );
+                }
+            }
+        }
     }
 }
