@@ -172,10 +172,37 @@ fn contact_cuts_follow_a_lamp_hung_below_the_ceiling() {
         .iter()
         .filter(|f| f.name.as_deref().is_some_and(|n| n.starts_with("ceiling")))
         .collect();
-    // The ceiling with a hole where the lamp covers it, and the covered square.
+    // The ceiling with a hole, the ring between the lamp's outline and the
+    // outline grown by ten gaps (0.1), and the covered square.
     let mut contours: Vec<usize> = ceiling.iter().map(|f| f.contours.len()).collect();
     contours.sort_unstable();
-    assert_eq!(contours, [1, 2], "{cut}");
+    assert_eq!(contours, [1, 2, 2], "{cut}");
+    let outer = ceiling
+        .iter()
+        .find(|f| {
+            f.contours.len() == 2
+                && f.contours[0]
+                    .iter()
+                    .all(|&v| m.vertices[v.idx()].pos.x.abs() > 0.0)
+        })
+        .expect("the ring");
+    let mut grown: Vec<[f64; 3]> = outer.contours[0]
+        .iter()
+        .map(|&v| {
+            let p = m.vertices[v.idx()].pos;
+            [(p.x * 1e9).round() / 1e9, (p.y * 1e9).round() / 1e9, p.z]
+        })
+        .collect();
+    grown.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    assert_eq!(
+        grown,
+        [
+            [3.9, 3.9, 3.0],
+            [3.9, 6.1, 3.0],
+            [6.1, 3.9, 3.0],
+            [6.1, 6.1, 3.0]
+        ]
+    );
     let island = ceiling.iter().find(|f| f.contours.len() == 1).unwrap();
     let mut corners: Vec<[f64; 3]> = island.contours[0]
         .iter()
@@ -210,8 +237,9 @@ fn contact_cuts_follow_a_lamp_hung_below_the_ceiling() {
     // ugclean keeps both pieces (they are not coincident with anything).
     let cleaned = run_ok("ugclean", &[], Some(cut.as_bytes()));
     assert_eq!(areas(&check(&cleaned)), areas(&r));
-    // --contact 0, or a gap larger than the contact distance: no cut.
-    for args in [&["--contact", "0"][..], &["--contact", "0.005"][..]] {
+    // --contact 0, or a gap (0.01) larger than the contact ratio times the
+    // lamp's size (2): no cut.
+    for args in [&["--contact", "0"][..], &["--contact", "0.004"][..]] {
         assert_eq!(
             run_ok("ugcopl", args, Some(src.as_bytes())),
             run_ok("ugcat", &[], Some(src.as_bytes())),
@@ -233,10 +261,11 @@ f above (q0 q1 q2 q3) white;",
     let cut = run_ok("ugcopl", &[], Some(src.as_bytes()));
     let m = ug::parse(cut.as_bytes(), "<cut>").unwrap().model;
     let names: Vec<&str> = m.faces.iter().filter_map(|f| f.name.as_deref()).collect();
-    // Only the lamp cuts the ceiling: two ceiling pieces, the rest whole.
+    // Only the lamp cuts the ceiling (outline and grown outline: three
+    // ceiling pieces); the rest whole.
     assert_eq!(
         names.iter().filter(|n| n.starts_with("ceiling")).count(),
-        2,
+        3,
         "{names:?}"
     );
     for whole in ["lamp", "panel", "above"] {

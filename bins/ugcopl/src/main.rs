@@ -8,7 +8,7 @@ Examples:
   ugvlmerge < in.ug | ugisect | ugcopl | ugclean | ugcut -l 2
   ugcopl -v -e 0.001 model.ug -o cut.ug
   ugcopl --contact 0 model.ug > cut.ug       no contact cuts (coplanar overlaps only)
-  ugcopl --contact 5 model.ug > cut.ug       cut behind faces up to 5 units in front";
+  ugcopl --contact 0.1 model.ug > cut.ug     cut behind covers up to a tenth of their size away";
 
 /// Intersect coplanar, overlapping faces (either orientation) in their plane
 /// so that every overlap region becomes a face of its own in each face it
@@ -32,22 +32,20 @@ struct Args {
     /// Distance tolerance in model units (default: 1e-6 of the bounding-box diagonal).
     #[arg(short = 'e', long = "epsilon", value_parser = cli::parse_epsilon)]
     epsilon: Option<f64>,
-    /// Largest gap for contact cuts, in model units (default: 1e-3 of the
-    /// bounding-box diagonal; 0 turns them off).
-    #[arg(long = "contact", value_name = "GAP", value_parser = cli::parse_epsilon)]
-    contact: Option<f64>,
+    /// Largest gap for contact cuts, as a fraction of the covering face's
+    /// size (√area); 0 turns them off.
+    #[arg(long = "contact", value_name = "RATIO", default_value_t = clean::copl::DEFAULT_CONTACT, value_parser = cli::parse_epsilon)]
+    contact: f64,
 }
 
 fn main() -> std::process::ExitCode {
     let args = Args::parse();
     let c = &args.common;
     cli::filter(c, args.epsilon, |model, eps| {
-        let contact = args
-            .contact
-            .unwrap_or_else(|| clean::copl::default_contact(&model));
+        let contact = args.contact;
         let (out, st) = clean::copl::copl_contact(&model, eps, contact)?;
         c.verbose(format!(
-            "epsilon {eps:e}; contact gap {contact:e}; {} overlapping pairs; {} contact pairs; {} faces cut into {} pieces; {} new vertices; {} T-vertices inserted",
+            "epsilon {eps:e}; contact ratio {contact}; {} overlapping pairs; {} contact pairs; {} faces cut into {} pieces; {} new vertices; {} T-vertices inserted",
             st.pairs, st.contacts, st.faces_cut, st.pieces, st.new_vertices, st.tvertices
         ));
         Ok(out)

@@ -20,21 +20,23 @@
 //! are merged and the points where the cuts meet neighbouring faces' edges
 //! are inserted into those edges, so no T-vertex is left.
 //!
-//! **Contact cuts.** A face may also be cut along the outline of a
-//! parallel face lying a small gap in front of it (more than the coplanar
-//! tolerance, at most `contact`): a lamp hung a hair below the ceiling, a
-//! rug on the floor, a picture on the wall, a cupboard pushed against a
-//! wall. The part of the face behind such a face sits in a slit that light
-//! hardly reaches, and unless the face is cut along the covering face's
-//! outline its patches interpolate lit corners across the dark part (on the
-//! Cornell box, whose lamp hangs 0.1 mm below the ceiling, the ceiling behind
-//! the lamp came out at 7% of the lamp's surroundings where the reference is
-//! 0, and the ceiling next to the lamp 6% dark). Only a face whose **front**
-//! faces the other is cut (what is behind a face's back is never seen), and
-//! only in its own plane: the covering face's contours are projected onto
-//! it as fresh points, so the pieces stay planar and no vertex is shared
-//! across the gap. The pieces are ordinary `ugcopl` pieces; they are not
-//! coincident with anything, so `ugclean` keeps them.
+//! **Contact cuts.** A face is also cut along the outline of a parallel
+//! face lying a small gap in front of it and strictly inside it (the gap
+//! more than the coplanar tolerance and at most `contact` times the
+//! covering face's size, √area): a lamp hung a hair below the ceiling, a
+//! rug, a picture, papers on a desk. The part behind such a face sits in a
+//! slit that light hardly reaches; unless the face is cut along the
+//! covering face's outline its patches interpolate lit corners across the
+//! dark part (the Cornell box's lamp hangs 0.1 mm below the ceiling: the
+//! ceiling behind it came out lit where the reference is 0). Only a face
+//! whose **front** faces the other is cut (what is behind a face's back is
+//! never seen), in its own plane, with the covering face's contours
+//! projected onto it as fresh points: the pieces stay planar and no vertex
+//! is shared across the gap. A second cut follows the outline grown by ten
+//! gaps ([`ring`]), so that the lit part's edge is lit. The cover must lie
+//! strictly inside the face, so the cuts never touch the face's boundary
+//! (no T-vertex for a neighbour). The pieces are ordinary `ugcopl` pieces,
+//! not coincident with anything: `ugclean` keeps them.
 
 use check::PairKind;
 use geom::arrange::Tag;
@@ -55,22 +57,26 @@ pub struct Stats {
     pub contacts: usize,
 }
 
-/// The default contact gap: this fraction of the model's bounding-box
-/// diagonal (about 1 mm in a 1 m scene, 2 cm across a 20 m building).
-pub const RELATIVE_CONTACT: f64 = 1e-3;
-
-/// [`RELATIVE_CONTACT`] times the model's bounding-box diagonal (0 for an
-/// empty model).
-pub fn default_contact(m: &Model) -> f64 {
-    match m.bounds() {
-        Some((lo, hi)) => RELATIVE_CONTACT * (hi - lo).length(),
-        None => 0.0,
-    }
-}
+/// The default contact ratio: a parallel face in front of another is a
+/// contact cover when its gap is at most this fraction of its own size
+/// (√area): 5.8 mm under the Cornell box's 130 × 105 mm lamp, 5 cm under
+/// a 1 m light panel, 8 cm under a 3 m² rug. Under such a cover even the
+/// middle sees the room only within about 6° of the plane: a slit, not a
+/// shadow that the radiosity mesh would resolve by itself.
+pub const DEFAULT_CONTACT: f64 = 0.05;
 
 /// Cuts the coplanar overlapping faces of a flat model (no contact cuts).
 pub fn copl(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
     copl_contact(m, eps, 0.0)
+}
+
+/// The area of a face's projection on its own plane.
+fn area_2d(g: &geom::intersect::FaceGeom) -> f64 {
+    g.contours_2d
+        .iter()
+        .map(|c| geom::polygon::signed_area_2d(c))
+        .sum::<f64>()
+        .abs()
 }
 
 /// Most cosine between two faces' normals for a contact pair: within
@@ -78,16 +84,21 @@ pub fn copl(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
 const CONTACT_PARALLEL: f64 = 0.999;
 
 /// The contact pairs `(k, j)`: face `j` lies entirely in front of face
-/// `k`, more than the coplanar tolerance and at most `gap` from its plane,
-/// the two nearly parallel and their boxes overlapping within `gap`. Face
+/// `k`, more than the coplanar tolerance and at most `ratio` × √(its
+/// area) from `k`'s plane, the two nearly parallel, `j` strictly inside
+/// `k` in projection. Face
 /// `k` is the one to cut. In face order, then `j` ascending.
+/// A contact pair: the face to cut, the covering face, and the grown
+/// outline for the second cut (when it fits).
+type Contact = (usize, usize, Option<Vec<geom::DVec2>>);
+
 fn contact_pairs(
     geoms: &[Option<geom::intersect::FaceGeom>],
     eps: f64,
-    gap: f64,
-) -> Vec<(usize, usize)> {
+    ratio: f64,
+) -> Vec<Contact> {
     let tol = geom::intersect::COPLANAR_EPSILONS * eps;
-    if gap <= tol {
+    if ratio <= 0.0 {
         return Vec::new();
     }
     let boxes: Vec<(geom::DVec3, geom::DVec3, u32)> = geoms
@@ -101,12 +112,17 @@ fn contact_pairs(
         })
         .collect();
     let index = geom::index::BoxIndex::new(boxes.iter().copied());
-    let per: Vec<Vec<(usize, usize)>> = boxes
+    let per: Vec<Vec<Contact>> = boxes
         .par_iter()
         .map(|&(lo, hi, k)| {
             let gk = geoms[k as usize]
                 .as_ref()
                 .expect("indexed faces have geometry");
+            // A cover lies inside `k`, so its gap is at most ratio × √(k's area).
+            let gap = ratio * area_2d(gk).sqrt();
+            if gap <= tol {
+                return Vec::new();
+            }
             let pad = geom::DVec3::splat(gap);
             let mut out = Vec::new();
             for j in index.query(lo - pad, hi + pad) {
@@ -119,13 +135,25 @@ fn contact_pairs(
                 if gk.plane.n.dot(gj.plane.n).abs() < CONTACT_PARALLEL {
                     continue;
                 }
+                let mut far = 0.0f64;
                 let in_gap = gj.contours.iter().flatten().all(|&p| {
                     let d = gk.plane.dist(p);
+                    far = far.max(d);
                     d > tol && d <= gap
                 });
-                if in_gap && covers_inside(gk, gj, eps) {
-                    out.push((k as usize, j as usize));
+                if !in_gap || far > ratio * area_2d(gj).sqrt() {
+                    continue;
                 }
+                let j2 = projected(gk, gj);
+                if !inside_2d(gk, &j2, eps) {
+                    continue;
+                }
+                let delta = RING_GAPS * far;
+                let grown = (delta > 4.0 * eps)
+                    .then(|| ring(&j2[0], delta))
+                    .flatten()
+                    .filter(|g| inside_2d(gk, std::slice::from_ref(g), eps));
+                out.push((k as usize, j as usize, grown));
             }
             out
         })
@@ -133,29 +161,34 @@ fn contact_pairs(
     per.into_iter().flatten().collect()
 }
 
-/// Whether `j` projected onto `k`'s plane lies strictly inside `k`: every
-/// vertex of `j` more than a few epsilons inside `k`, and no contour of `k`
-/// reaching into `j` (no vertex of `k` in or on `j`, no edges touching).
-/// Only then is `k` cut along `j`'s outline: the cut makes no vertex on
-/// `k`'s boundary, so no neighbour gains a T-vertex and orientation across
-/// `k`'s edges is untouched. A covering face that straddles `k`'s edge (a
+/// `j`'s contours projected into `k`'s frame.
+fn projected(
+    gk: &geom::intersect::FaceGeom,
+    gj: &geom::intersect::FaceGeom,
+) -> Vec<Vec<geom::DVec2>> {
+    gj.contours
+        .iter()
+        .map(|c| c.iter().map(|&p| gk.frame.to_2d(p)).collect())
+        .collect()
+}
+
+/// Whether the polygon `j2` (in `k`'s frame) lies strictly inside `k`:
+/// every vertex more than a few epsilons inside `k`, and no contour of `k`
+/// reaching into it (no vertex of `k` in or on it, no edges touching).
+/// Only then is `k` cut along it: the cut makes no vertex on `k`'s
+/// boundary, so no neighbour gains a T-vertex and orientation across `k`'s
+/// edges is untouched. A covering face that straddles `k`'s edge (a
 /// cupboard across two wall pieces) is left alone.
-fn covers_inside(gk: &geom::intersect::FaceGeom, gj: &geom::intersect::FaceGeom, eps: f64) -> bool {
+fn inside_2d(gk: &geom::intersect::FaceGeom, j2: &[Vec<geom::DVec2>], eps: f64) -> bool {
     use geom::polygon::Location;
     let margin = 4.0 * eps;
-    if !gj
-        .contours
+    if !j2
         .iter()
         .flatten()
-        .all(|&p| gk.locate(p, margin) == Location::Inside)
+        .all(|&p| geom::intersect::locate_eps(p, &gk.contours_2d, margin) == Location::Inside)
     {
         return false;
     }
-    let j2: Vec<Vec<geom::DVec2>> = gj
-        .contours
-        .iter()
-        .map(|c| c.iter().map(|&p| gk.frame.to_2d(p)).collect())
-        .collect();
     let (mut jlo, mut jhi) = (
         geom::DVec2::splat(f64::INFINITY),
         geom::DVec2::splat(f64::NEG_INFINITY),
@@ -179,10 +212,10 @@ fn covers_inside(gk: &geom::intersect::FaceGeom, gj: &geom::intersect::FaceGeom,
         }
         for i in 0..c.len() {
             let (a, bb) = (c[i], c[(i + 1) % c.len()]);
-            if geom::intersect::locate_eps(a, &j2, margin) != Location::Outside {
+            if geom::intersect::locate_eps(a, j2, margin) != Location::Outside {
                 return false;
             }
-            for jc in &j2 {
+            for jc in j2 {
                 for t in 0..jc.len() {
                     let (p, q) = (jc[t], jc[(t + 1) % jc.len()]);
                     if geom::predicates::segments_2d(a, bb, p, q)
@@ -197,9 +230,57 @@ fn covers_inside(gk: &geom::intersect::FaceGeom, gj: &geom::intersect::FaceGeom,
     true
 }
 
+/// How far outside a covering face's outline the second, outer cut goes,
+/// in gaps (see [`ring`]).
+const RING_GAPS: f64 = 10.0;
+
+/// The outer contour of a convex covering face grown by `delta` (mitred
+/// corners, in `k`'s frame), when that is well defined: the contour convex
+/// and counter-clockwise or clockwise throughout, no corner sharper than
+/// the miter limit. The cut along it separates the lit part of `k` from
+/// the thin ring next to the outline: a point of `k` on the outline itself
+/// sees the covering face edge-on over half its hemisphere and gets about
+/// a quarter of the light a point a few gaps outside gets, so the patches
+/// outside would interpolate that dark value over a whole element. On the
+/// grown outline, `RING_GAPS` gaps out, the covering face hides only
+/// directions within atan(1/10) ≈ 6° of the plane (under 1% of the light).
+fn ring(outer: &[geom::DVec2], delta: f64) -> Option<Vec<geom::DVec2>> {
+    let n = outer.len();
+    if n < 3 {
+        return None;
+    }
+    let area = geom::polygon::signed_area_2d(outer);
+    if area == 0.0 {
+        return None;
+    }
+    let sign = area.signum();
+    // Outward normal of edge i (from i to i + 1).
+    let normal = |i: usize| {
+        let d = (outer[(i + 1) % n] - outer[i]).normalize_or_zero();
+        geom::DVec2::new(d.y, -d.x) * sign
+    };
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        let (a, b, c) = (outer[(i + n - 1) % n], outer[i], outer[(i + 1) % n]);
+        // Convex at every corner (collinear corners allowed).
+        if (b - a).perp_dot(c - b) * sign < 0.0 {
+            return None;
+        }
+        let (n1, n2) = (normal((i + n - 1) % n), normal(i));
+        let m = n1 + n2;
+        let k = 1.0 + n1.dot(n2);
+        if n1 == geom::DVec2::ZERO || n2 == geom::DVec2::ZERO || k < 0.125 {
+            return None; // a sharp corner: the miter would reach far out
+        }
+        out.push(b + m * (delta / k));
+    }
+    Some(out)
+}
+
 /// Cuts the coplanar overlapping faces of a flat model, and cuts each face
-/// along the outlines of the parallel faces lying at most `contact` in
-/// front of it (see the module's "Contact cuts"; 0: none).
+/// along the outlines of the parallel faces lying in front of it at most
+/// `contact` times their size (√area) away (see the module's "Contact
+/// cuts"; 0: none).
 pub fn copl_contact(m: &Model, eps: f64, contact: f64) -> Result<(Model, Stats), ug::Diagnostic> {
     let (faces, geoms) = face_geoms(m);
     let pairs: Vec<(usize, usize)> = check::coplanar_pairs(&geoms, eps)
@@ -221,9 +302,9 @@ pub fn copl_contact(m: &Model, eps: f64, contact: f64) -> Result<(Model, Stats),
         others[i].push(j);
         others[j].push(i);
     }
-    let mut covers: Vec<Vec<usize>> = vec![Vec::new(); faces.len()];
-    for &(k, j) in &contacts {
-        covers[k].push(j);
+    let mut covers: Vec<Vec<(usize, Option<Vec<geom::DVec2>>)>> = vec![Vec::new(); faces.len()];
+    for (k, j, grown) in contacts {
+        covers[k].push((j, grown));
     }
     let pos = |v: ug::VertexId| m.vertices[v.idx()].pos;
     let work: Vec<usize> = (0..faces.len())
@@ -264,12 +345,19 @@ pub fn copl_contact(m: &Model, eps: f64, contact: f64) -> Result<(Model, Stats),
             // Covering faces in front: their contours projected onto this
             // face's plane as fresh points (never their vertices, which lie
             // across the gap).
-            for (t, &j) in covers[k].iter().enumerate() {
-                let tag = Tag::Toggle((others[k].len() + t) as u32 + 1);
-                for c in &m.faces[faces[j].idx()].contours {
+            let mut tag = others[k].len() as u32 + 1;
+            for (j, grown) in &covers[k] {
+                for c in &m.faces[faces[*j].idx()].contours {
                     let ring: Vec<(geom::DVec2, Option<ug::VertexId>)> =
                         c.iter().map(|&v| (g.frame.to_2d(pos(v)), None)).collect();
-                    layout.ring(&winged::pieces::clip_ring(&ring, lo, hi), tag);
+                    layout.ring(&ring, Tag::Toggle(tag));
+                }
+                tag += 1;
+                if let Some(grown) = grown {
+                    let ring: Vec<(geom::DVec2, Option<ug::VertexId>)> =
+                        grown.iter().map(|&p| (p, None)).collect();
+                    layout.ring(&ring, Tag::Toggle(tag));
+                    tag += 1;
                 }
             }
             let arr = layout.arrange(eps, false);
