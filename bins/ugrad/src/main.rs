@@ -89,6 +89,9 @@ struct Args {
     /// Split elements whose radiosity differs across an edge by more than this (default: 0.1 × mean emitted power per area).
     #[arg(long, value_parser = cli::parse_epsilon)]
     gradient: Option<f64>,
+    /// … and by more than this fraction of the larger value (0: the absolute threshold alone).
+    #[arg(long, value_name = "FRACTION", default_value_t = 0.0, value_parser = cli::parse_epsilon)]
+    gradient_relative: f64,
     /// … unless their longest edge is below this length (default: an eighth of the mean patch edge).
     #[arg(long, value_parser = cli::parse_epsilon)]
     min_edge: Option<f64>,
@@ -110,6 +113,12 @@ struct Args {
     /// else 512).
     #[arg(long, value_name = "N")]
     tail_rays: Option<usize>,
+    /// After the tail, split elements where its reflected light is steep
+    /// (the gradient rule) and gather it exactly at the new vertices, the
+    /// steepest first, at most this many times as many vertices as the
+    /// patch corners that gathered it (0: never).
+    #[arg(long, default_value_t = 1.0, value_name = "FRACTION", value_parser = cli::parse_epsilon)]
+    tail_refine: f64,
     /// How visibility is decided. auto: the hemi-cube on a hardware GPU,
     /// else ray casting (on a software rasteriser such as lavapipe the CPU
     /// ray caster is faster).
@@ -285,6 +294,7 @@ fn main() -> std::process::ExitCode {
             penumbra_energy: args.penumbra_energy,
             penumbra_size: args.penumbra_size,
             gradient: args.gradient,
+            gradient_relative: args.gradient_relative,
             min_edge: args.min_edge,
             output: match args.quantity {
                 OutputKind::Radiosity => radiosity::Output::Radiosity,
@@ -293,6 +303,7 @@ fn main() -> std::process::ExitCode {
             ambient: args.ambient,
             tail: args.tail,
             tail_rays: args.tail_rays,
+            tail_refine: args.tail_refine,
             regather: args.regather,
             ..radiosity::Options::default()
         };
@@ -372,7 +383,7 @@ fn main() -> std::process::ExitCode {
         }
         if let Some(t) = &solver.tail {
             c.verbose(format!(
-                "indirect tail after shot {}: {} patch centres ({} pairs stored, {:.1} MB with the geometry; {}), {} iterations; unshot {:.3e} -> {:.3e}; {} corners gathered; {:.2} s to build, {:.3} s to iterate, {:.2} s for the corners",
+                "indirect tail after shot {}: {} patch centres ({} pairs stored, {:.1} MB with the geometry; {}), {} iterations; unshot {:.3e} -> {:.3e}; {} corners gathered; {:.2} s to build, {:.3} s to iterate, {:.2} s for the corners; {} elements refined after it, {} vertices gathered, {:.2} s",
                 t.after_shots,
                 solver.mesh.num_patches(),
                 t.pairs,
@@ -388,7 +399,10 @@ fn main() -> std::process::ExitCode {
                 t.receivers,
                 t.build_seconds,
                 t.iterate_seconds,
-                t.corner_seconds
+                t.corner_seconds,
+                t.refined,
+                t.regathered,
+                t.refine_seconds
             ));
         }
         c.verbose(format!(

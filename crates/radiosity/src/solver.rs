@@ -21,6 +21,36 @@ fn add(a: Rgb, b: Rgb) -> Rgb {
 fn scale(a: Rgb, s: f64) -> Rgb {
     [a[0] * s, a[1] * s, a[2] * s]
 }
+/// Whether an edge between values `a` and `b` is steep (§6): in some
+/// channel they differ by more than the absolute threshold `grad` and by
+/// more than `rel` times the larger of the two.
+/// How steep an edge is: the largest ratio, over the channels, of the
+/// difference to its threshold (the larger of `grad` and `rel` times the
+/// larger value); above 1 it is [`steep`].
+fn steepness(a: Rgb, b: Rgb, grad: f64, rel: f64) -> f64 {
+    (0..3)
+        .map(|k| {
+            let d = (a[k] - b[k]).abs();
+            let t = grad.max(rel * a[k].max(b[k]));
+            if t > 0.0 {
+                d / t
+            } else if d > 0.0 {
+                f64::INFINITY
+            } else {
+                0.0
+            }
+        })
+        .fold(0.0, f64::max)
+}
+
+#[inline]
+fn steep(a: Rgb, b: Rgb, grad: f64, rel: f64) -> bool {
+    (0..3).any(|k| {
+        let d = (a[k] - b[k]).abs();
+        d > grad && d > rel * a[k].max(b[k])
+    })
+}
+
 fn sum(a: Rgb) -> f64 {
     a[0] + a[1] + a[2]
 }
@@ -64,6 +94,9 @@ pub struct Options {
     /// subdivided (§6); auto: a tenth of the scene's expected mean radiosity
     /// (emitted power per area and channel over 1 − mean reflectance).
     pub gradient: Option<f64>,
+    /// … and by more than this fraction of the larger of the two values
+    /// (0: the absolute threshold alone).
+    pub gradient_relative: f64,
     /// … unless their longest edge is below this (auto: an eighth of the mean patch edge).
     pub min_edge: Option<f64>,
     pub output: Output,
@@ -80,6 +113,10 @@ pub struct Options {
     /// (`Some(0)`: try every patch; `None`: every patch while corners ×
     /// patches ≤ 4·10⁶, else 512).
     pub tail_rays: Option<usize>,
+    /// After the tail, split where its reflected light is steep and gather
+    /// it exactly at the new vertices, at most this many times the patch
+    /// corners' gather (the steepest first; 0: never).
+    pub tail_refine: f64,
     /// Give a vertex made by refinement its exact irradiance from every
     /// earlier shot (re-shooting them at it) instead of the mean of its
     /// parents' (§6's rule). The mean is wrong wherever earlier light was
@@ -100,12 +137,14 @@ impl Default for Options {
             penumbra_energy: 0.02,
             penumbra_size: None,
             gradient: None,
+            gradient_relative: 0.0,
             min_edge: None,
             output: Output::Radiosity,
             ambient: false,
             offset: 1e-6,
             tail: 5e-3,
             tail_rays: None,
+            tail_refine: 1.0,
             regather: false,
         }
     }
@@ -165,6 +204,11 @@ pub struct TailStats {
     pub build_seconds: f64,
     pub iterate_seconds: f64,
     pub corner_seconds: f64,
+    /// Elements split after the tail where its light was not linear, the
+    /// new vertices that gathered it exactly, and the time it took.
+    pub refined: usize,
+    pub regathered: usize,
+    pub refine_seconds: f64,
     /// Heap bytes of the transport while it existed.
     pub bytes: usize,
 }
@@ -483,6 +527,7 @@ impl<'v> Solver<'v> {
         let mut chunk: Vec<ElemId> = Vec::with_capacity(CHUNK);
         for _round in 0..32 {
             let grad = self.gradient;
+            let rel = self.opts.gradient_relative;
             let min_edge = self.min_edge;
             // Leaves in order, a chunk at a time (a list of all leaves would
             // cost 4 bytes per leaf).
@@ -508,7 +553,7 @@ impl<'v> Solver<'v> {
                         (0..c.len()).any(|i| {
                             let (a, b) =
                                 (this.radiosity(c[i]), this.radiosity(c[(i + 1) % c.len()]));
-                            (0..3).any(|k| (a[k] - b[k]).abs() > grad)
+                            steep(a, b, grad, rel)
                         })
                     })
                     .collect();
@@ -624,7 +669,8 @@ impl<'v> Solver<'v> {
         // The shot scratch array is not needed meanwhile (a later shot regrows it).
         self.gain = Vec::new();
         let cancel = crate::tail::canceller(interrupt.clone(), deadline);
-        let Some(tr) = crate::tail::Transport::build(&self.mesh, self.opts.offset, rays, &cancel)
+        let Some(mut tr) =
+            crate::tail::Transport::build(&self.mesh, self.opts.offset, rays, &cancel)
         else {
             self.tail = Some(TailStats {
                 after_shots: self.shots.len(),
@@ -702,8 +748,7 @@ impl<'v> Solver<'v> {
             });
             return TailEnd::Stopped(stopped(&interrupt));
         };
-        drop(tr);
-        drop(shot_b);
+        tr.drop_rows();
         let corner_seconds = t2.elapsed().as_secs_f64();
         // A split quad patch's centre vertex takes the irradiance its patch
         // centre received (a fifth sample: between the corners the field is
@@ -748,6 +793,14 @@ impl<'v> Solver<'v> {
             t_all[v] = t;
             self.h[v] = add(self.h[v], t);
         }
+        // §6 for the tail's light: split where the radiosity is not linear
+        // across an element, each new vertex gathering the tail exactly.
+        let t3 = Instant::now();
+        let budget = (self.opts.tail_refine * recv.len() as f64).ceil() as usize;
+        let refined = self.refine_tail(&tr, &shot_b, &mut t_all, budget, &cancel);
+        let refine_seconds = t3.elapsed().as_secs_f64();
+        drop(tr);
+        drop(shot_b);
         drop(t_all);
         let receivers = recv.len();
         // What is left unshot is exactly the last iteration's reflection.
@@ -771,9 +824,143 @@ impl<'v> Solver<'v> {
             build_seconds,
             iterate_seconds,
             corner_seconds,
+            refined: refined.0,
+            regathered: refined.1,
+            refine_seconds,
             bytes,
         });
         end
+    }
+
+    /// Splits the leaves across one of whose edges the tail's reflected
+    /// light (ρ × the tail's irradiance) is steep by the gradient rule
+    /// (above the minimum edge), rounds until none is left; each new vertex
+    /// takes the light of the shots before the tail as §6 does (the mean
+    /// of its parents') and gathers the tail's exactly. `t_all` is the
+    /// tail's irradiance per vertex (grown here). Returns the elements
+    /// split and the vertices gathered.
+    fn refine_tail(
+        &mut self,
+        tr: &crate::tail::Transport,
+        shot_b: &[Rgb],
+        t_all: &mut Vec<Rgb>,
+        budget: usize,
+        cancel: &(dyn Fn() -> bool + Sync),
+    ) -> (usize, usize) {
+        let (grad, min_edge) = (self.gradient, self.min_edge);
+        let rel = self.opts.gradient_relative;
+        let (mut split_count, mut gathered) = (0, 0);
+        let mut chunk: Vec<ElemId> = Vec::with_capacity(CHUNK);
+        for _round in 0..32 {
+            if cancel() || gathered >= budget {
+                break;
+            }
+            let mut to_split: Vec<(f64, ElemId)> = Vec::new();
+            let mut leaves = self.mesh.leaves();
+            loop {
+                chunk.clear();
+                chunk.extend(leaves.by_ref().take(CHUNK));
+                if chunk.is_empty() {
+                    break;
+                }
+                let this = &*self;
+                let t = &*t_all;
+                let part: Vec<(f64, ElemId)> = chunk
+                    .par_iter()
+                    .copied()
+                    .filter_map(|e| {
+                        let c = this.mesh.elem_corners(e);
+                        if !c.iter().any(|&v| sum(t[v.idx()]) > 0.0)
+                            || this.mesh.elem_longest_edge(e) <= min_edge
+                        {
+                            return None;
+                        }
+                        // The tail's own light, reflected: where it is
+                        // not linear (the shots' light was judged by the
+                        // shots' own refinement).
+                        let r = this.rho[this.mesh.elem_surface(e).idx()];
+                        let b = |v: VertId| {
+                            let h = t[v.idx()];
+                            [r[0] * h[0], r[1] * h[1], r[2] * h[2]]
+                        };
+                        let s = (0..c.len())
+                            .map(|i| steepness(b(c[i]), b(c[(i + 1) % c.len()]), grad, rel))
+                            .fold(0.0, f64::max);
+                        (s > 1.0).then_some((s, e))
+                    })
+                    .collect();
+                to_split.extend(part);
+            }
+            drop(leaves);
+            if to_split.is_empty() {
+                break;
+            }
+            // New vertices with the element whose split made them (its
+            // patch gives the size).
+            // The steepest first, within the budget.
+            to_split.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+            let mut fresh: Vec<(VertId, ElemId)> = Vec::new();
+            for (_, e) in to_split {
+                if gathered + fresh.len() >= budget {
+                    break;
+                }
+                if !self.mesh.elem_is_leaf(e) {
+                    continue; // already split by balancing
+                }
+                let split = self.mesh.split(e);
+                split_count += split.refined.len();
+                self.grow();
+                t_all.resize(self.mesh.num_vertices(), [0.0; 3]);
+                for nv in &split.new_vertices {
+                    let (a, b) = (nv.parents[0].idx(), nv.parents[1].idx());
+                    let before = |v: usize| {
+                        let (h, t) = (self.h[v], t_all[v]);
+                        [h[0] - t[0], h[1] - t[1], h[2] - t[2]]
+                    };
+                    // Until it is gathered, the tail's part is the mean too
+                    // (a later vertex of this split may have it as a parent).
+                    let tm = scale(add(t_all[a], t_all[b]), 0.5);
+                    self.h[nv.v.idx()] = add(scale(add(before(a), before(b)), 0.5), tm);
+                    t_all[nv.v.idx()] = tm;
+                    fresh.push((nv.v, e));
+                }
+            }
+            if fresh.is_empty() {
+                break;
+            }
+            let mut ids: Vec<VertId> = fresh.iter().map(|f| f.0).collect();
+            ids.sort_unstable();
+            let dirs = self.inward(&ids);
+            let mesh = &self.mesh;
+            let got: Vec<Rgb> = fresh
+                .par_iter()
+                .map(|&(v, e)| {
+                    let inward = dirs[ids.binary_search(&v).expect("a fresh vertex")];
+                    let p = mesh.elem_patch(e);
+                    let corners = mesh.patch_corners(p);
+                    let size = (0..corners.len())
+                        .map(|i| {
+                            (mesh.vertex_pos(corners[(i + 1) % corners.len()])
+                                - mesh.vertex_pos(corners[i]))
+                            .length()
+                        })
+                        .fold(0.0, f64::max);
+                    tr.at(mesh, v, inward, size, shot_b)
+                })
+                .collect();
+            gathered += fresh.len();
+            for (&(v, _), t) in fresh.iter().zip(got) {
+                let i = v.idx();
+                let (h, old) = (self.h[i], t_all[i]);
+                self.h[i] = [
+                    h[0] - old[0] + t[0],
+                    h[1] - old[1] + t[1],
+                    h[2] - old[2] + t[2],
+                ];
+                t_all[i] = t;
+            }
+        }
+        (split_count, gathered)
     }
 
     /// Frees the working arrays of a shot (8 bytes per vertex) until the
@@ -1088,6 +1275,41 @@ impl<'v> Solver<'v> {
             for &v in corners {
                 if let Ok(k) = verts.binary_search(&v) {
                     acc[k] += (c - self.mesh.vertex_pos(v)).normalize_or_zero();
+                }
+            }
+        }
+        // A vertex that is no leaf's corner lies on a leaf's edge (a hanging
+        // midpoint, or a copy stitched in when the surface across the edge
+        // was split): its parents' direction. Without it a stitched vertex
+        // at a wall's foot got none, and the floor's light, edge-on there,
+        // did not reach it (the wall's foot came out half as bright).
+        let missing: Vec<usize> = (0..verts.len())
+            .filter(|&k| acc[k] == DVec3::ZERO)
+            .collect();
+        if !missing.is_empty() {
+            let mut parents: Vec<VertId> = missing
+                .iter()
+                .filter_map(|&k| match self.mesh.vertex_origin(verts[k]) {
+                    libmesh::VertexOrigin::Split([a, b]) => Some([a, b]),
+                    libmesh::VertexOrigin::Input(_) => None,
+                })
+                .flatten()
+                .collect();
+            parents.sort_unstable();
+            parents.dedup();
+            if !parents.is_empty() {
+                let dirs = self.inward(&parents);
+                let dir = |v: VertId| {
+                    parents
+                        .binary_search(&v)
+                        .map(|i| dirs[i])
+                        .unwrap_or(DVec3::ZERO)
+                };
+                for k in missing {
+                    if let libmesh::VertexOrigin::Split([a, b]) = self.mesh.vertex_origin(verts[k])
+                    {
+                        acc[k] = dir(a) + dir(b);
+                    }
                 }
             }
         }
