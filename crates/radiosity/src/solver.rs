@@ -24,6 +24,24 @@ fn scale(a: Rgb, s: f64) -> Rgb {
 /// Whether an edge between values `a` and `b` is steep (§6): in some
 /// channel they differ by more than the absolute threshold `grad` and by
 /// more than `rel` times the larger of the two.
+/// `f` of every leaf of `mesh` that gives something, in leaf order: a
+/// chunk of leaves at a time in parallel (a list of all leaves would cost
+/// 4 bytes per leaf).
+fn scan_leaves<T: Send>(mesh: &Mesh, f: impl Fn(ElemId) -> Option<T> + Sync) -> Vec<T> {
+    let mut out = Vec::new();
+    let mut chunk: Vec<ElemId> = Vec::with_capacity(CHUNK);
+    let mut leaves = mesh.leaves();
+    loop {
+        chunk.clear();
+        chunk.extend(leaves.by_ref().take(CHUNK));
+        if chunk.is_empty() {
+            return out;
+        }
+        let part: Vec<T> = chunk.par_iter().filter_map(|&e| f(e)).collect();
+        out.extend(part);
+    }
+}
+
 /// How steep an edge is: the largest ratio, over the channels, of the
 /// difference to its threshold (the larger of `grad` and `rel` times the
 /// larger value); above 1 it is [`steep`].
@@ -524,42 +542,25 @@ impl<'v> Solver<'v> {
 
         // §6: gradient subdivision, re-shooting this light at the new vertices.
         let mut subdivided = 0;
-        let mut chunk: Vec<ElemId> = Vec::with_capacity(CHUNK);
         for _round in 0..32 {
             let grad = self.gradient;
             let rel = self.opts.gradient_relative;
             let min_edge = self.min_edge;
-            // Leaves in order, a chunk at a time (a list of all leaves would
-            // cost 4 bytes per leaf).
-            let mut to_split: Vec<ElemId> = Vec::new();
-            let mut leaves = self.mesh.leaves();
-            loop {
-                chunk.clear();
-                chunk.extend(leaves.by_ref().take(CHUNK));
-                if chunk.is_empty() {
-                    break;
+            let this = &*self;
+            let to_split: Vec<ElemId> = scan_leaves(&self.mesh, |e| {
+                let c = this.mesh.elem_corners(e);
+                if !c.iter().any(|&v| sum(this.dh(v)) > 0.0)
+                    || this.mesh.elem_longest_edge(e) <= min_edge
+                {
+                    return None;
                 }
-                let this = &*self;
-                let part: Vec<ElemId> = chunk
-                    .par_iter()
-                    .copied()
-                    .filter(|&e| {
-                        let c = this.mesh.elem_corners(e);
-                        if !c.iter().any(|&v| sum(this.dh(v)) > 0.0)
-                            || this.mesh.elem_longest_edge(e) <= min_edge
-                        {
-                            return false;
-                        }
-                        (0..c.len()).any(|i| {
-                            let (a, b) =
-                                (this.radiosity(c[i]), this.radiosity(c[(i + 1) % c.len()]));
-                            steep(a, b, grad, rel)
-                        })
+                (0..c.len())
+                    .any(|i| {
+                        let (a, b) = (this.radiosity(c[i]), this.radiosity(c[(i + 1) % c.len()]));
+                        steep(a, b, grad, rel)
                     })
-                    .collect();
-                to_split.extend(part);
-            }
-            drop(leaves);
+                    .then_some(e)
+            });
             if to_split.is_empty() {
                 break;
             }
@@ -850,53 +851,33 @@ impl<'v> Solver<'v> {
         let (grad, min_edge) = (self.gradient, self.min_edge);
         let rel = self.opts.gradient_relative;
         let (mut split_count, mut gathered) = (0, 0);
-        let mut chunk: Vec<ElemId> = Vec::with_capacity(CHUNK);
         for _round in 0..32 {
             if cancel() || gathered >= budget {
                 break;
             }
-            let mut to_split: Vec<(f64, ElemId)> = Vec::new();
-            let mut leaves = self.mesh.leaves();
-            loop {
-                chunk.clear();
-                chunk.extend(leaves.by_ref().take(CHUNK));
-                if chunk.is_empty() {
-                    break;
+            let (this, t) = (&*self, &*t_all);
+            let mut to_split: Vec<(f64, ElemId)> = scan_leaves(&self.mesh, |e| {
+                let c = this.mesh.elem_corners(e);
+                if !c.iter().any(|&v| sum(t[v.idx()]) > 0.0)
+                    || this.mesh.elem_longest_edge(e) <= min_edge
+                {
+                    return None;
                 }
-                let this = &*self;
-                let t = &*t_all;
-                let part: Vec<(f64, ElemId)> = chunk
-                    .par_iter()
-                    .copied()
-                    .filter_map(|e| {
-                        let c = this.mesh.elem_corners(e);
-                        if !c.iter().any(|&v| sum(t[v.idx()]) > 0.0)
-                            || this.mesh.elem_longest_edge(e) <= min_edge
-                        {
-                            return None;
-                        }
-                        // The tail's own light, reflected: where it is
-                        // not linear (the shots' light was judged by the
-                        // shots' own refinement).
-                        let r = this.rho[this.mesh.elem_surface(e).idx()];
-                        let b = |v: VertId| {
-                            let h = t[v.idx()];
-                            [r[0] * h[0], r[1] * h[1], r[2] * h[2]]
-                        };
-                        let s = (0..c.len())
-                            .map(|i| steepness(b(c[i]), b(c[(i + 1) % c.len()]), grad, rel))
-                            .fold(0.0, f64::max);
-                        (s > 1.0).then_some((s, e))
-                    })
-                    .collect();
-                to_split.extend(part);
-            }
-            drop(leaves);
+                // The tail's own light, reflected: where it is not linear
+                // (the shots' light was judged by the shots' own refinement).
+                let r = this.rho[this.mesh.elem_surface(e).idx()];
+                let b = |v: VertId| {
+                    let h = t[v.idx()];
+                    [r[0] * h[0], r[1] * h[1], r[2] * h[2]]
+                };
+                let s = (0..c.len())
+                    .map(|i| steepness(b(c[i]), b(c[(i + 1) % c.len()]), grad, rel))
+                    .fold(0.0, f64::max);
+                (s > 1.0).then_some((s, e))
+            });
             if to_split.is_empty() {
                 break;
             }
-            // New vertices with the element whose split made them (its
-            // patch gives the size).
             // The steepest first, within the budget.
             to_split.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
             let mut fresh: Vec<(VertId, ElemId)> = Vec::new();

@@ -364,22 +364,7 @@ impl Transport {
                         .iter()
                         .map(|&p| self.shooters[p as usize].size)
                         .fold(0.0, f64::max);
-                    let row = self.row(&Receiver {
-                        x,
-                        n: mesh.vertex_normal(v),
-                        surface: mesh.vertex_surface(v).0,
-                        inward,
-                        size,
-                        seed: mix(v.0 as u64),
-                    });
-                    let mut h = [0.0; 3];
-                    for (p, w) in row {
-                        let b = s[p as usize];
-                        for k in 0..3 {
-                            h[k] += w as f64 * b[k];
-                        }
-                    }
-                    h
+                    self.at(mesh, v, inward, size, s)
                 })
                 .collect();
             out.extend(part);
@@ -395,9 +380,10 @@ impl Transport {
         self.weight = Vec::new();
     }
 
-    /// The irradiance at the mesh vertex `v` from patches of radiosity `s`:
-    /// a vertex made by refinement after the tail, gathered exactly as a
-    /// corner is. `inward` points from `v` into its element.
+    /// The irradiance at the mesh vertex `v` from patches of radiosity `s`
+    /// (a patch corner, or a vertex made by the refinement after the tail):
+    /// its row, computed, used and dropped. `inward` points from `v` into
+    /// its surface; `size` is the size of its patches.
     pub fn at(&self, mesh: &Mesh, v: VertId, inward: DVec3, size: f64, s: &[Rgb]) -> Rgb {
         let row = self.row(&Receiver {
             x: mesh.vertex_pos(v),
