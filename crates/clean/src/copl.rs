@@ -83,15 +83,20 @@ fn area_2d(g: &geom::intersect::FaceGeom) -> f64 {
 /// about 2.6° of parallel (a lamp, rug or picture lies flat on its face).
 const CONTACT_PARALLEL: f64 = 0.999;
 
-/// The contact pairs `(k, j)`: face `j` lies entirely in front of face
-/// `k`, more than the coplanar tolerance and at most `ratio` × √(its
-/// area) from `k`'s plane, the two nearly parallel, `j` strictly inside
-/// `k` in projection. Face
-/// `k` is the one to cut. In face order, then `j` ascending.
-/// A contact pair: the face to cut, the covering face, and the grown
-/// outline for the second cut (when it fits).
-type Contact = (usize, usize, Option<Vec<geom::DVec2>>);
+/// A contact pair: the face to cut, the covering face's contours
+/// projected into the cut face's frame, and that outline grown for the
+/// second cut (when it fits).
+struct Contact {
+    k: usize,
+    outline: Vec<Vec<geom::DVec2>>,
+    grown: Option<Vec<geom::DVec2>>,
+}
 
+/// The contact pairs: a face `j` lying entirely in front of face `k`, more
+/// than the coplanar tolerance and at most `ratio` × √(its area) from
+/// `k`'s plane, the two nearly parallel, `j` strictly inside `k` in
+/// projection. Face `k` is the one to cut. In face order, then `j`
+/// ascending.
 fn contact_pairs(
     geoms: &[Option<geom::intersect::FaceGeom>],
     eps: f64,
@@ -112,6 +117,10 @@ fn contact_pairs(
         })
         .collect();
     let index = geom::index::BoxIndex::new(boxes.iter().copied());
+    let size: Vec<f64> = geoms
+        .iter()
+        .map(|g| g.as_ref().map_or(0.0, |g| area_2d(g).sqrt()))
+        .collect();
     let per: Vec<Vec<Contact>> = boxes
         .par_iter()
         .map(|&(lo, hi, k)| {
@@ -119,7 +128,7 @@ fn contact_pairs(
                 .as_ref()
                 .expect("indexed faces have geometry");
             // A cover lies inside `k`, so its gap is at most ratio × √(k's area).
-            let gap = ratio * area_2d(gk).sqrt();
+            let gap = ratio * size[k as usize];
             if gap <= tol {
                 return Vec::new();
             }
@@ -141,35 +150,32 @@ fn contact_pairs(
                     far = far.max(d);
                     d > tol && d <= gap
                 });
-                if !in_gap || far > ratio * area_2d(gj).sqrt() {
+                if !in_gap || far > ratio * size[j as usize] {
                     continue;
                 }
-                let j2 = projected(gk, gj);
-                if !inside_2d(gk, &j2, eps) {
+                let outline: Vec<Vec<geom::DVec2>> = gj
+                    .contours
+                    .iter()
+                    .map(|c| c.iter().map(|&p| gk.frame.to_2d(p)).collect())
+                    .collect();
+                if !inside_2d(gk, &outline, eps) {
                     continue;
                 }
                 let delta = RING_GAPS * far;
                 let grown = (delta > 4.0 * eps)
-                    .then(|| ring(&j2[0], delta))
+                    .then(|| ring(&outline[0], delta))
                     .flatten()
                     .filter(|g| inside_2d(gk, std::slice::from_ref(g), eps));
-                out.push((k as usize, j as usize, grown));
+                out.push(Contact {
+                    k: k as usize,
+                    outline,
+                    grown,
+                });
             }
             out
         })
         .collect();
     per.into_iter().flatten().collect()
-}
-
-/// `j`'s contours projected into `k`'s frame.
-fn projected(
-    gk: &geom::intersect::FaceGeom,
-    gj: &geom::intersect::FaceGeom,
-) -> Vec<Vec<geom::DVec2>> {
-    gj.contours
-        .iter()
-        .map(|c| c.iter().map(|&p| gk.frame.to_2d(p)).collect())
-        .collect()
 }
 
 /// Whether the polygon `j2` (in `k`'s frame) lies strictly inside `k`:
@@ -185,29 +191,18 @@ fn inside_2d(gk: &geom::intersect::FaceGeom, j2: &[Vec<geom::DVec2>], eps: f64) 
     if !j2
         .iter()
         .flatten()
-        .all(|&p| geom::intersect::locate_eps(p, &gk.contours_2d, margin) == Location::Inside)
+        .all(|&p| gk.locate_2d(p, margin) == Location::Inside)
     {
         return false;
     }
-    let (mut jlo, mut jhi) = (
-        geom::DVec2::splat(f64::INFINITY),
-        geom::DVec2::splat(f64::NEG_INFINITY),
-    );
-    for &p in j2.iter().flatten() {
-        jlo = jlo.min(p);
-        jhi = jhi.max(p);
-    }
-    let pad = geom::DVec2::splat(margin);
+    let bbox = |pts: &mut dyn Iterator<Item = &geom::DVec2>| {
+        let (lo, hi) = geom::index::bbox(pts.map(|p| p.extend(0.0)), margin);
+        (lo.truncate(), hi.truncate())
+    };
+    let (jlo, jhi) = bbox(&mut j2.iter().flatten());
     for c in &gk.contours_2d {
-        let (mut lo, mut hi) = (
-            geom::DVec2::splat(f64::INFINITY),
-            geom::DVec2::splat(f64::NEG_INFINITY),
-        );
-        for &p in c {
-            lo = lo.min(p);
-            hi = hi.max(p);
-        }
-        if !(lo.cmple(jhi + pad).all() && hi.cmpge(jlo - pad).all()) {
+        let (lo, hi) = bbox(&mut c.iter());
+        if !(lo.cmple(jhi).all() && hi.cmpge(jlo).all()) {
             continue;
         }
         for i in 0..c.len() {
@@ -302,9 +297,10 @@ pub fn copl_contact(m: &Model, eps: f64, contact: f64) -> Result<(Model, Stats),
         others[i].push(j);
         others[j].push(i);
     }
-    let mut covers: Vec<Vec<(usize, Option<Vec<geom::DVec2>>)>> = vec![Vec::new(); faces.len()];
-    for (k, j, grown) in contacts {
-        covers[k].push((j, grown));
+    let mut covers: Vec<Vec<Contact>> = (0..faces.len()).map(|_| Vec::new()).collect();
+    for c in contacts {
+        let k = c.k;
+        covers[k].push(c);
     }
     let pos = |v: ug::VertexId| m.vertices[v.idx()].pos;
     let work: Vec<usize> = (0..faces.len())
@@ -344,19 +340,18 @@ pub fn copl_contact(m: &Model, eps: f64, contact: f64) -> Result<(Model, Stats),
             }
             // Covering faces in front: their contours projected onto this
             // face's plane as fresh points (never their vertices, which lie
-            // across the gap).
+            // across the gap), and the grown outline.
             let mut tag = others[k].len() as u32 + 1;
-            for (j, grown) in &covers[k] {
-                for c in &m.faces[faces[*j].idx()].contours {
-                    let ring: Vec<(geom::DVec2, Option<ug::VertexId>)> =
-                        c.iter().map(|&v| (g.frame.to_2d(pos(v)), None)).collect();
-                    layout.ring(&ring, Tag::Toggle(tag));
+            let fresh = |pts: &[geom::DVec2]| -> Vec<(geom::DVec2, Option<ug::VertexId>)> {
+                pts.iter().map(|&p| (p, None)).collect()
+            };
+            for c in &covers[k] {
+                for contour in &c.outline {
+                    layout.ring(&fresh(contour), Tag::Toggle(tag));
                 }
                 tag += 1;
-                if let Some(grown) = grown {
-                    let ring: Vec<(geom::DVec2, Option<ug::VertexId>)> =
-                        grown.iter().map(|&p| (p, None)).collect();
-                    layout.ring(&ring, Tag::Toggle(tag));
+                if let Some(grown) = &c.grown {
+                    layout.ring(&fresh(grown), Tag::Toggle(tag));
                     tag += 1;
                 }
             }

@@ -84,7 +84,11 @@ impl FaceGeom {
     /// Location of a 3-D point (assumed in or near the plane) with tolerance
     /// `eps`: within `eps` of an edge counts as the boundary.
     pub fn locate(&self, p: DVec3, eps: f64) -> Location {
-        let q = self.frame.to_2d(p);
+        self.locate_2d(self.frame.to_2d(p), eps)
+    }
+
+    /// [`FaceGeom::locate`] for a point already in the face's frame.
+    pub fn locate_2d(&self, q: DVec2, eps: f64) -> Location {
         let Some(ix) = &self.edges else {
             return locate_eps(q, &self.contours_2d, eps);
         };

@@ -21,9 +21,6 @@ fn add(a: Rgb, b: Rgb) -> Rgb {
 fn scale(a: Rgb, s: f64) -> Rgb {
     [a[0] * s, a[1] * s, a[2] * s]
 }
-/// Whether an edge between values `a` and `b` is steep (§6): in some
-/// channel they differ by more than the absolute threshold `grad` and by
-/// more than `rel` times the larger of the two.
 /// `f` of every leaf of `mesh` that gives something, in leaf order: a
 /// chunk of leaves at a time in parallel (a list of all leaves would cost
 /// 4 bytes per leaf).
@@ -61,12 +58,12 @@ fn steepness(a: Rgb, b: Rgb, grad: f64, rel: f64) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// Whether an edge between values `a` and `b` is steep (§6): in some
+/// channel they differ by more than the absolute threshold `grad` and by
+/// more than `rel` times the larger of the two.
 #[inline]
 fn steep(a: Rgb, b: Rgb, grad: f64, rel: f64) -> bool {
-    (0..3).any(|k| {
-        let d = (a[k] - b[k]).abs();
-        d > grad && d > rel * a[k].max(b[k])
-    })
+    steepness(a, b, grad, rel) > 1.0
 }
 
 fn sum(a: Rgb) -> f64 {
@@ -917,16 +914,7 @@ impl<'v> Solver<'v> {
                 .par_iter()
                 .map(|&(v, e)| {
                     let inward = dirs[ids.binary_search(&v).expect("a fresh vertex")];
-                    let p = mesh.elem_patch(e);
-                    let corners = mesh.patch_corners(p);
-                    let size = (0..corners.len())
-                        .map(|i| {
-                            (mesh.vertex_pos(corners[(i + 1) % corners.len()])
-                                - mesh.vertex_pos(corners[i]))
-                            .length()
-                        })
-                        .fold(0.0, f64::max);
-                    tr.at(mesh, v, inward, size, shot_b)
+                    tr.at(mesh, v, inward, tr.patch_size(mesh.elem_patch(e)), shot_b)
                 })
                 .collect();
             gathered += fresh.len();

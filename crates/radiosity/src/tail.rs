@@ -29,14 +29,13 @@
 //!   irradiance interpolated from its patch's corners (each split vertex the
 //!   mean of its parents: linear along edges, bilinear in quads).
 //! * **Refinement** (§6 for the tail's light): then every leaf element
-//!   whose radiosity differs across an edge by more than the gradient
-//!   threshold is split, down to the minimum edge, as a shot would split
-//!   it, and each new vertex gathers the tail's light exactly (its own row)
-//!   instead of taking the mean of its parents. Without it the reflected
-//!   light was resolved at patch size: next to the Cornell box's lamp, which
-//!   hangs 0.1 mm below the ceiling, the ceiling came out 10–25% dark for
-//!   a whole patch (16 mm at `-l 3%`) from the lamp's outline, where the
-//!   reference is dark only within a fraction of a millimetre.
+//!   across one of whose edges the tail's reflected light (ρ × its
+//!   irradiance) is steep by the gradient rule is split, down to the
+//!   minimum edge, the steepest first and within a budget (`tail_refine`
+//!   times the corners gathered), and each new vertex gathers the tail
+//!   exactly ([`Transport::at`]) instead of taking the mean of its parents.
+//!   Without it reflected light was resolved at patch size: a furnished
+//!   room's ceiling next to its lamp came out 17% dark at `-l 3%`.
 //! * **Which patches a point sees** is found by casting `rays`
 //!   cosine-distributed rays from it (stratified, jittered by a hash of the
 //!   receiver: deterministic); for each surface hit, its patches within the
@@ -370,6 +369,11 @@ impl Transport {
             out.extend(part);
         }
         Some((recv, out))
+    }
+
+    /// The longest edge of patch `p`.
+    pub fn patch_size(&self, p: libmesh::PatchId) -> f64 {
+        self.shooters[p.idx()].size
     }
 
     /// Frees the stored centre rows (the iteration is over; the geometry

@@ -103,8 +103,9 @@ pub enum Point {
 #[derive(Clone, Debug)]
 pub struct Layout {
     pub frame: Frame,
-    /// The vertex of each input point.
-    pub ids: Vec<VertexId>,
+    /// The vertex of each input point (`None` for a point that is no
+    /// vertex: a neighbour's contour clipped to a box, a projected outline).
+    pub ids: Vec<Option<VertexId>>,
     pub points: Vec<DVec2>,
     pub segments: Vec<Segment>,
     index: FxHashMap<VertexId, u32>,
@@ -169,14 +170,14 @@ impl Layout {
                         return k;
                     }
                     let k = self.ids.len() as u32;
-                    self.ids.push(v);
+                    self.ids.push(Some(v));
                     self.points.push(p);
                     self.index.insert(v, k);
                     k
                 }
                 None => {
                     let k = self.ids.len() as u32;
-                    self.ids.push(VertexId(u32::MAX));
+                    self.ids.push(None);
                     self.points.push(p);
                     k
                 }
@@ -196,7 +197,7 @@ impl Layout {
             return k;
         }
         let k = self.ids.len() as u32;
-        self.ids.push(v);
+        self.ids.push(Some(v));
         self.points.push(self.frame.to_2d(p));
         self.index.insert(v, k);
         k
@@ -227,15 +228,10 @@ impl Layout {
             .map(|l| {
                 l.iter()
                     .map(|&k| {
-                        let id = if (k as usize) < arr.inputs {
-                            self.ids[arr.rep[k as usize] as usize]
-                        } else {
-                            VertexId(u32::MAX)
-                        };
-                        if id.0 != u32::MAX {
-                            Point::Vertex(id)
-                        } else {
-                            Point::New(self.frame.to_3d(arr.points[k as usize]))
+                        let id = (k as usize) < arr.inputs;
+                        match id.then(|| self.ids[arr.rep[k as usize] as usize]).flatten() {
+                            Some(v) => Point::Vertex(v),
+                            None => Point::New(self.frame.to_3d(arr.points[k as usize])),
                         }
                     })
                     .collect()
