@@ -1025,7 +1025,7 @@ impl Hemicube {
             .iter()
             .enumerate()
             .map(|(i, &v)| {
-                let d = (mesh.vertex_pos(v) - from).as_vec3();
+                let d = (mesh.receiver_pos(v) - from).as_vec3();
                 [d.x, d.y, d.z, f32::from_bits(i as u32)]
             })
             .collect();
@@ -1039,13 +1039,17 @@ impl Hemicube {
             .gpu
             .lock()
             .map_err(|_| GpuError("hemi-cube state poisoned".into()))?;
-        match self.opts.method {
+        // A vertex on its surface's boundary receives a hair inside its
+        // surface (`Mesh::receiver_pos`), within a pixel of the border of a
+        // face standing there: questionable by construction.
+        let stepped = |v: VertId| mesh.receiver_pos(v) != mesh.vertex_pos(v);
+        let mut out = match self.opts.method {
             Method::Depth => {
                 let f = self.depth_flags(&s, &sh, &rel_s)?;
-                Ok(Classified {
+                Classified {
                     raw: f.iter().map(|x| x & 1 != 0).collect(),
                     questionable: f.iter().map(|x| x & 2 != 0).collect(),
-                })
+                }
             }
             Method::Points | Method::Decal => {
                 let raw = if self.opts.method == Method::Points {
@@ -1063,9 +1067,13 @@ impl Hemicube {
                 for (q, x) in questionable.iter_mut().zip(&f) {
                     *q |= x & 2 != 0;
                 }
-                Ok(Classified { raw, questionable })
+                Classified { raw, questionable }
             }
+        };
+        for (q, &v) in out.questionable.iter_mut().zip(candidates) {
+            *q |= stepped(v);
         }
+        Ok(out)
     }
 
     /// §4.5: the vertices of every element that has visible and hidden
@@ -1083,7 +1091,7 @@ impl Hemicube {
         let mut q: Vec<bool> = candidates
             .iter()
             .map(|&v| {
-                let d = mesh.vertex_pos(v) - from;
+                let d = mesh.receiver_pos(v) - from;
                 d.dot(n) < 1.5 * pixel * d.length()
             })
             .collect();

@@ -179,9 +179,11 @@ fn depth_method_matches_ray_casting_on_a_furnished_room() {
         "{after} of {total} differ"
     );
     // Most answers come from the GPU, not from the ray-cast fallback. (In
-    // this coarse room most vertices lie on an edge where two surfaces meet,
-    // and those are ray cast: 26% measured.)
-    assert!(questionable * 10 < total * 3, "{questionable} of {total}");
+    // this coarse room most vertices lie on a surface's boundary, where they
+    // receive a hair inside their surface, within a pixel of the face
+    // standing there: those are ray cast. 44% measured; 26% before receiver
+    // points were stepped in. A refined mesh has far fewer.)
+    assert!(questionable < total / 2, "{questionable} of {total}");
 }
 
 #[test]

@@ -325,16 +325,42 @@ impl Mesh {
                 && coplanar(a, b)
         };
 
-        // Surfaces.
-        let mut dsu = Dsu((0..raw.len() as u32).collect());
+        // Adjacency: an edge joins two patches that join (same material,
+        // coplanar, opposite directions) when no face out of their plane
+        // uses it. An edge that a third face also uses — the foot of a wall
+        // standing between two floor pieces, a partition meeting a wall — is
+        // a boundary on both sides: the light differs across it, so neither
+        // side's vertices may be shared with the other's.
+        // (Patches lying in the plane of the pair — the back of a two-sided
+        // wall sharing its vertices — do not break the join.)
+        let in_plane = |a: &RawPatch, b: &RawPatch| {
+            let n = a.unit();
+            b.cls[..b.n]
+                .iter()
+                .all(|&k| (classes.rep_pos[k as usize] - a.centroid).dot(n).abs() <= eps)
+        };
+        let mut adjacent: Vec<[(u32, u8); 2]> = Vec::new();
         for g in &groups {
+            let a = &raw[g[0].2 as usize];
+            if !g.iter().all(|x| in_plane(a, &raw[x.2 as usize])) {
+                continue;
+            }
+            let mut used = vec![false; g.len()];
             for i in 0..g.len() {
                 for j in i + 1..g.len() {
-                    if joins(&g[i], &g[j]) {
-                        dsu.union(g[i].2, g[j].2);
+                    if !used[i] && !used[j] && joins(&g[i], &g[j]) {
+                        used[i] = true;
+                        used[j] = true;
+                        adjacent.push([(g[i].2, g[i].3), (g[j].2, g[j].3)]);
                     }
                 }
             }
+        }
+
+        // Surfaces: patches connected through adjacent edges.
+        let mut dsu = Dsu((0..raw.len() as u32).collect());
+        for [(pi, _), (pj, _)] in &adjacent {
+            dsu.union(*pi, *pj);
         }
         let mut surf_of_root: FxHashMap<u32, u32> = FxHashMap::default();
         let mut surfaces: Vec<Surface> = Vec::new();
@@ -357,8 +383,20 @@ impl Mesh {
             s.normal = s.normal.normalize_or_zero();
         }
 
-        // Vertex copies, one per (surface, class), in face order.
-        let mut vmap: FxHashMap<(u32, u32), u32> = FxHashMap::default();
+        // Vertex copies: one per sector, a set of corners (patch, corner
+        // index) of one class connected through adjacent edges. A surface
+        // usually has one copy of a point; a point on a wall's foot has one
+        // per side of the wall, even when the two sides' floors are one
+        // surface (joined through a doorway). Copies are made in face order.
+        let mut corners = Dsu((0..raw.len() as u32 * 4).collect());
+        for [(pi, ki), (pj, kj)] in &adjacent {
+            let (ni, nj) = (raw[*pi as usize].n as u32, raw[*pj as usize].n as u32);
+            let (ki, kj) = (*ki as u32, *kj as u32);
+            // The edges run opposite ways: i's start is j's end.
+            corners.union(pi * 4 + ki, pj * 4 + (kj + 1) % nj);
+            corners.union(pi * 4 + (ki + 1) % ni, pj * 4 + kj);
+        }
+        let mut vmap: FxHashMap<u32, u32> = FxHashMap::default();
         let mut pos = Vec::new();
         let mut vsurf = Vec::new();
         let mut vparent = Vec::new();
@@ -368,7 +406,8 @@ impl Mesh {
             let s = psurf[p];
             let mut v = [VertId(NONE); 4];
             for (i, &c) in r.cls[..r.n].iter().enumerate() {
-                let id = *vmap.entry((s, c)).or_insert_with(|| {
+                let root = corners.find(p as u32 * 4 + i as u32);
+                let id = *vmap.entry(root).or_insert_with(|| {
                     pos.push(classes.rep_pos[c as usize]);
                     vsurf.push(s);
                     vparent.push([classes.reps[c as usize], NONE]);
@@ -398,38 +437,44 @@ impl Mesh {
         if pos.len() >= NONE as usize {
             return Err(BuildError::TooLarge);
         }
+        for [(pi, ki), (pj, kj)] in &adjacent {
+            patches[*pi as usize].adj[*ki as usize] = pj * 4 + *kj as u32;
+            patches[*pj as usize].adj[*kj as usize] = pi * 4 + *ki as u32;
+        }
 
-        // Adjacency inside surfaces, and twins across them.
+        // Twins: every other patch using an edge that is not adjacent.
+        let copy_at = |p: u32, c: u32| -> VertId {
+            let r = &raw[p as usize];
+            let i = r.cls[..r.n]
+                .iter()
+                .position(|&x| x == c)
+                .expect("an edge's end is a corner of its patch");
+            elems[p as usize].v[i]
+        };
         let mut twins: Vec<Vec<[VertId; 2]>> = vec![Vec::new(); raw.len() * 4];
         for g in &groups {
             for i in 0..g.len() {
                 let (pi, ki) = (g[i].2, g[i].3 as usize);
+                if patches[pi as usize].adj[ki] != NONE {
+                    continue;
+                }
                 let ri = &raw[pi as usize];
                 let (c0, c1) = (ri.cls[ki], ri.cls[(ki + 1) % ri.n]);
-                for j in 0..g.len() {
-                    let (pj, kj) = (g[j].2, g[j].3 as usize);
-                    if pi == pj {
+                let own = [copy_at(pi, c0), copy_at(pi, c1)];
+                for (j, gj) in g.iter().enumerate() {
+                    let pj = gj.2;
+                    if pi == pj || j == i {
                         continue;
                     }
-                    let (si, sj) = (psurf[pi as usize], psurf[pj as usize]);
-                    if si == sj {
-                        if patches[pi as usize].adj[ki] == NONE
-                            && patches[pj as usize].adj[kj] == NONE
-                            && joins(&g[i], &g[j])
-                        {
-                            patches[pi as usize].adj[ki] = pj * 4 + kj as u32;
-                            patches[pj as usize].adj[kj] = pi * 4 + ki as u32;
-                        }
-                    } else {
-                        let t = [VertId(vmap[&(sj, c0)]), VertId(vmap[&(sj, c1)])];
-                        let list = &mut twins[pi as usize * 4 + ki];
-                        if !list.contains(&t) {
-                            list.push(t);
-                        }
+                    let t = [copy_at(pj, c0), copy_at(pj, c1)];
+                    let list = &mut twins[pi as usize * 4 + ki];
+                    if t != own && !list.contains(&t) {
+                        list.push(t);
                     }
                 }
             }
         }
+        let nudge = boundary_nudges(&pos, &vsurf, &surfaces, &elems, &patches, eps);
         let mut twin_start = Vec::with_capacity(twins.len() + 1);
         let mut twin_verts = Vec::new();
         twin_start.push(0u32);
@@ -442,6 +487,7 @@ impl Mesh {
             pos,
             vsurf,
             vparent,
+            nudge,
             mid: Default::default(),
             n_leaves: elems.len(),
             elems,
@@ -453,4 +499,69 @@ impl Mesh {
             degenerate,
         })
     }
+}
+
+/// Relative size of the step a receiver on its surface's boundary takes into
+/// its surface (see [`Mesh::receiver_pos`]): this fraction of the boundary
+/// edge it lies on (the shortest, at a corner) …
+pub(crate) const NUDGE_REL: f64 = 1e-4;
+/// … and at least this many build epsilons, so that a ray from across a wall
+/// standing on the boundary (within epsilon of it) meets the wall.
+pub(crate) const NUDGE_EPS: f64 = 10.0;
+
+/// The step of length `NUDGE_REL · len` (within the bounds above) along `dir`.
+pub(crate) fn nudge_of(dir: DVec3, len: f64, eps: f64) -> [f32; 3] {
+    if dir == DVec3::ZERO || len.is_nan() || len <= 0.0 {
+        return [0.0; 3];
+    }
+    let d = (NUDGE_REL * len).max(NUDGE_EPS * eps).min(0.25 * len);
+    (dir * d).as_vec3().to_array()
+}
+
+/// The inward unit normal, in the plane of normal `n`, of the boundary edge
+/// a → b of an element whose corners run counter-clockwise seen from the front.
+#[inline]
+pub(crate) fn edge_inward(n: DVec3, a: DVec3, b: DVec3) -> DVec3 {
+    n.cross(b - a).normalize_or_zero()
+}
+
+/// Each input vertex copy's step into its surface: along the sum of the
+/// inward normals of the surface-boundary patch edges through it (zero
+/// inside the surface, or where they cancel).
+fn boundary_nudges(
+    pos: &[DVec3],
+    vsurf: &[u32],
+    surfaces: &[Surface],
+    elems: &[Elem],
+    patches: &[Patch],
+    eps: f64,
+) -> Vec<[f32; 3]> {
+    let mut dir = vec![DVec3::ZERO; pos.len()];
+    let mut len = vec![f64::INFINITY; pos.len()];
+    for (p, patch) in patches.iter().enumerate() {
+        let el = &elems[p];
+        let n = el.n();
+        for k in 0..n {
+            if patch.adj[k] != NONE {
+                continue;
+            }
+            let (a, b) = (el.v[k].idx(), el.v[(k + 1) % n].idx());
+            let d = edge_inward(surfaces[vsurf[a] as usize].normal, pos[a], pos[b]);
+            let l = pos[a].distance(pos[b]);
+            for v in [a, b] {
+                dir[v] += d;
+                len[v] = len[v].min(l);
+            }
+        }
+    }
+    dir.iter()
+        .zip(&len)
+        .map(|(&d, &l)| {
+            if d.length() > 1e-6 {
+                nudge_of(d.normalize(), l, eps)
+            } else {
+                [0.0; 3]
+            }
+        })
+        .collect()
 }

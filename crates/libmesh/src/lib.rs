@@ -24,9 +24,18 @@
 //!
 //! * A **surface** is a maximal set of patches connected through shared edges
 //!   that are coplanar (within the build epsilon), of the same material and
-//!   orientation. Each surface has its own copy of every vertex it uses (a
-//!   corner shared by a floor and a wall exists twice, once per surface, since
-//!   each copy carries its surface's normal and, in the solver, its own value).
+//!   orientation, and that no face out of their plane also uses (the foot of
+//!   a wall standing between two floor pieces separates them: light is
+//!   discontinuous there). Each surface has its own copy of every vertex it
+//!   uses (a corner shared by a floor and a wall exists twice, once per
+//!   surface, since each copy carries its surface's normal and, in the
+//!   solver, its own value), and one copy per *sector* of a point: the
+//!   corners at that point connected through joined edges. A floor joined
+//!   around a partition's free end (or through a doorway) is one surface,
+//!   but the points on the partition's foot have one copy per side.
+//! * Each vertex on its surface's boundary (outline, holes, and edges that
+//!   other faces use) has a **receiver point** a hair inside its surface
+//!   ([`Mesh::receiver_pos`]), where the solver evaluates what it sees.
 //! * A **patch** is one input face: a triangle or a convex quadrilateral. It is
 //!   the root element of a quadtree.
 //! * An **element** is a node of a patch's quadtree. Splitting puts a vertex
@@ -51,8 +60,8 @@
 //! reused: elements are 32-byte records (corners, parent, first child, patch,
 //! level, and which patch edge each element edge lies on) with the four
 //! children of a split at consecutive ids, and no per-element heap
-//! allocation. Vertices are a position, a surface and two parent ids (36
-//! bytes). Edge midpoints are found through one hash table of vertex ids keyed
+//! allocation. Vertices are a position, a surface, two parent ids and the
+//! step to the receiver point (48 bytes). Edge midpoints are found through one hash table of vertex ids keyed
 //! by the edge's two vertex ids (smaller first; the key is not stored: it is
 //! the midpoint's parents), which is also how a leaf finds the hanging
 //! midpoints and stitched vertices on its edges. Patch roots are elements
@@ -119,12 +128,13 @@
 //!
 //! # Memory
 //!
-//! An element is 32 bytes, a vertex 36 (position, surface, parents) plus,
+//! An element is 32 bytes, a vertex 48 (position, surface, parents, receiver step) plus,
 //! for an edge midpoint, one hash-table entry (a 4-byte vertex id and a
 //! control byte, at most 7/8 full). Uniform refinement of quads makes 4/3 elements and
 //! about one vertex per leaf (two thirds of them edge midpoints): measured
 //! on a 100 × 100 patch grid refined three levels, 84 bytes of heap per
-//! element (112 per leaf), vector growth slack included.
+//! element (112 per leaf), vector growth slack included, before the 12-byte
+//! receiver step was added (about one vertex per leaf: some 124 per leaf).
 //!
 //! # Use from the solver
 //!
@@ -263,6 +273,9 @@ pub struct Mesh {
     /// parent vertices (ends of the edge it was put on; for a quad centre the
     /// midpoints of two opposite edges).
     pub(crate) vparent: Vec<[u32; 2]>,
+    /// The step from each vertex to its receiver point (zero inside its
+    /// surface; see [`Mesh::receiver_pos`]).
+    pub(crate) nudge: Vec<[f32; 3]>,
     /// Edge (smaller vertex id, larger) → the vertex at its midpoint.
     pub(crate) mid: MidMap,
     pub(crate) elems: Vec<Elem>,
@@ -331,6 +344,20 @@ impl Mesh {
 
     pub fn vertex_pos(&self, v: VertId) -> DVec3 {
         self.pos[v.idx()]
+    }
+
+    /// Where the vertex receives light: its position, or for a vertex on its
+    /// surface's boundary (the outline and holes of the surface, and every
+    /// edge another face also uses, such as a wall's foot) a point a hair
+    /// inside the surface: 10⁻⁴ of the boundary edge it was made on (the
+    /// shortest at a corner), at least 10 build epsilons, along the inward
+    /// normal of that edge (at a corner, of both). Light is discontinuous
+    /// across such an edge, and from the edge itself both sides are seen: a
+    /// floor vertex at the foot of a partition wall would see the lamps of
+    /// both rooms. Visibility and form factors are evaluated here, so each
+    /// copy takes the limit from inside its own surface.
+    pub fn receiver_pos(&self, v: VertId) -> DVec3 {
+        self.pos[v.idx()] + glam::Vec3::from_array(self.nudge[v.idx()]).as_dvec3()
     }
 
     pub fn vertex_surface(&self, v: VertId) -> SurfaceId {
@@ -559,6 +586,7 @@ impl Mesh {
         self.pos.capacity() * size_of::<DVec3>()
             + self.vsurf.capacity() * 4
             + self.vparent.capacity() * 8
+            + self.nudge.capacity() * 12
             + self.elems.capacity() * size_of::<Elem>()
             // hashbrown: one entry plus one control byte per bucket.
             + self.mid.capacity() * 8 / 7 * (size_of::<u32>() + 1)
@@ -582,7 +610,7 @@ impl Mesh {
         use std::mem::size_of;
         (
             size_of::<Elem>(),
-            size_of::<DVec3>() + 4 + 8,
+            size_of::<DVec3>() + 4 + 8 + 12,
             size_of::<u32>() + 1,
         )
     }

@@ -2,6 +2,7 @@
 
 use glam::DVec3;
 
+use crate::build::{edge_inward, nudge_of};
 use crate::{Elem, ElemId, INTERIOR, MAX_LEVEL, Mesh, NONE, NewVertex, Split, VertId};
 
 /// Where edge `k` of child `c` lies.
@@ -166,6 +167,7 @@ impl Mesh {
                 (self.pos[m[0].idx()] + self.pos[m[2].idx()]) * 0.5,
                 self.vsurf[m[0].idx()],
                 [m[0].0, m[2].0],
+                [0.0; 3],
                 out,
             );
             for ci in 0..4 {
@@ -193,10 +195,18 @@ impl Mesh {
         out.refined.push(ElemId(e));
     }
 
-    fn new_vertex(&mut self, p: DVec3, surface: u32, parents: [u32; 2], out: &mut Split) -> VertId {
+    fn new_vertex(
+        &mut self,
+        p: DVec3,
+        surface: u32,
+        parents: [u32; 2],
+        nudge: [f32; 3],
+        out: &mut Split,
+    ) -> VertId {
         let id = self.pos.len() as u32;
         assert!(id < NONE, "libmesh: more than 2^32 - 1 vertices");
         self.pos.push(p);
+        self.nudge.push(nudge);
         self.vsurf.push(surface);
         self.vparent.push(parents);
         if parents[1] != NONE {
@@ -217,9 +227,17 @@ impl Mesh {
             return VertId(m);
         }
         let p = (self.pos[a.idx()] + self.pos[b.idx()]) * 0.5;
-        let m = self.new_vertex(p, self.vsurf[a.idx()], [a.0, b.0], out);
-        self.mid.insert(&self.vparent, m.0);
         let j = el.pedge(k);
+        // On the surface's boundary: a step in along the edge's inward normal.
+        let nudge = if j != INTERIOR && self.patches[el.patch as usize].adj[j as usize] == NONE {
+            let (pa, pb) = (self.pos[a.idx()], self.pos[b.idx()]);
+            let n = self.surfaces[self.vsurf[a.idx()] as usize].normal;
+            nudge_of(edge_inward(n, pa, pb), pa.distance(pb), self.eps)
+        } else {
+            [0.0; 3]
+        };
+        let m = self.new_vertex(p, self.vsurf[a.idx()], [a.0, b.0], nudge, out);
+        self.mid.insert(&self.vparent, m.0);
         if j != INTERIOR {
             let t = el.patch as usize * 4 + j as usize;
             let (lo, hi) = (self.twin_start[t], self.twin_start[t + 1]);
@@ -279,7 +297,23 @@ impl Mesh {
             return VertId(m);
         }
         let p = (self.pos[x.idx()] + self.pos[y.idx()]) * 0.5;
-        let m = self.new_vertex(p, self.vsurf[x.idx()], [x.0, y.0], out);
+        // A twin edge is on its surface's boundary: step in along its inward
+        // normal, the side its ends step to.
+        let (px, py) = (self.pos[x.idx()], self.pos[y.idx()]);
+        let n = self.surfaces[self.vsurf[x.idx()] as usize].normal;
+        let mut inward = edge_inward(n, px, py);
+        let ends = glam::Vec3::from_array(self.nudge[x.idx()]).as_dvec3()
+            + glam::Vec3::from_array(self.nudge[y.idx()]).as_dvec3();
+        let side = inward.dot(ends);
+        if side < 0.0 {
+            inward = -inward;
+        }
+        let nudge = if side == 0.0 {
+            [0.0; 3]
+        } else {
+            nudge_of(inward, px.distance(py), self.eps)
+        };
+        let m = self.new_vertex(p, self.vsurf[x.idx()], [x.0, y.0], nudge, out);
         self.mid.insert(&self.vparent, m.0);
         m
     }

@@ -748,3 +748,67 @@ fn streamed_output_is_the_written_model() {
     );
     assert!(text.contains("f floor.2 ") && !text.contains("f floor.1 ("));
 }
+
+/// A 2 × 2 floor of unit-half cells with a partition (two faces back to back)
+/// standing on the middle line from y = 0 to y = 1, ending at the floor's
+/// middle vertex: the floor stays one surface (joined around the partition's
+/// free end), but the points on the partition's foot get a copy per side,
+/// and those copies receive a hair inside their own side.
+const PARTITION: &str = "c_rgb grey 0.5 0.5 0.5;
+    v a 0 0 0; v b 1 0 0; v c 2 0 0; v d 0 1 0; v e 1 1 0; v f 2 1 0;
+    v g 0 2 0; v h 1 2 0; v i 2 2 0; v p 1 0 1; v q 1 1 1;
+    f a0 (a b e d) grey; f b0 (b c f e) grey; f a1 (d e h g) grey; f b1 (e f i h) grey;
+    f west (b p q e) grey; f east (e q p b) grey;";
+
+#[test]
+fn a_partition_foot_gets_a_vertex_copy_per_side() {
+    let (_, m) = mesh(PARTITION);
+    // Floor, and each side of the partition.
+    assert_eq!(m.num_surfaces(), 3);
+    let floor = m.patch_surface(PatchId(0));
+    assert!((0..4).all(|p| m.patch_surface(PatchId(p)) == floor));
+    let copies = |x: f64, y: f64| -> Vec<VertId> {
+        (0..m.num_vertices() as u32)
+            .map(VertId)
+            .filter(|&v| m.vertex_surface(v) == floor && m.vertex_pos(v) == DVec3::new(x, y, 0.0))
+            .collect()
+    };
+    // The foot's far end: one copy per side, each receiving on its side.
+    let b = copies(1.0, 0.0);
+    assert_eq!(b.len(), 2, "{b:?}");
+    let sides: Vec<f64> = b.iter().map(|&v| m.receiver_pos(v).x - 1.0).collect();
+    assert!(sides[0] * sides[1] < 0.0, "{sides:?}");
+    for &v in &b {
+        let step = m.receiver_pos(v) - m.vertex_pos(v);
+        assert!(step.z == 0.0 && step.y > 0.0, "{step}");
+        assert!(
+            step.length() < 1e-3 && step.length() >= 10.0 * EPS,
+            "{step}"
+        );
+    }
+    // The free end is one point of the floor around it; inside the floor.
+    let e = copies(1.0, 1.0);
+    assert_eq!(e.len(), 1);
+    assert_eq!(m.receiver_pos(e[0]), m.vertex_pos(e[0]));
+    // Splitting a cell on one side stitches the foot's midpoint into the
+    // other side's copy of the edge, stepped to its own side.
+    let split = {
+        let mut m = m.clone();
+        let s = m.split(ElemId(0));
+        m.validate().unwrap();
+        let mids: Vec<VertId> = s
+            .new_vertices
+            .iter()
+            .map(|n| n.v)
+            .filter(|&v| {
+                m.vertex_pos(v) == DVec3::new(1.0, 0.5, 0.0) && m.vertex_surface(v) == floor
+            })
+            .collect();
+        assert_eq!(mids.len(), 2, "{mids:?}");
+        let mut xs: Vec<f64> = mids.iter().map(|&v| m.receiver_pos(v).x - 1.0).collect();
+        xs.sort_by(f64::total_cmp);
+        assert!(xs[0] < 0.0 && xs[1] > 0.0, "{xs:?}");
+        m
+    };
+    assert!(split.num_vertices() > m.num_vertices());
+}

@@ -1049,7 +1049,13 @@ impl<'v> Solver<'v> {
             if mesh.vertex_surface(v) == surface {
                 return false;
             }
-            receives(mesh.vertex_pos(v), mesh.vertex_normal(v), c, normal, delta)
+            receives(
+                mesh.receiver_pos(v),
+                mesh.vertex_normal(v),
+                c,
+                normal,
+                delta,
+            )
         };
         // §5.4 needs each receiver's direction into its own surface only for
         // candidates on (or just behind) a shooter's plane: find those first.
@@ -1057,7 +1063,7 @@ impl<'v> Solver<'v> {
         for ((_, c), &delta) in shooters.iter().zip(&deltas) {
             for i in 0..n_targets {
                 let v = target(i);
-                if candidate(v, *c, delta) && normal.dot(mesh.vertex_pos(v) - *c) < delta {
+                if candidate(v, *c, delta) && normal.dot(mesh.receiver_pos(v) - *c) < delta {
                     near_plane.push(v);
                 }
             }
@@ -1106,7 +1112,8 @@ impl<'v> Solver<'v> {
                         if !s {
                             return 0.0;
                         }
-                        let x = offset_receiver(mesh.vertex_pos(v), || nudge(v), *c, normal, delta);
+                        let x =
+                            offset_receiver(mesh.receiver_pos(v), || nudge(v), *c, normal, delta);
                         point_to_polygon(x, mesh.vertex_normal(v), poly)
                     })
                     .collect();
@@ -1146,7 +1153,9 @@ impl<'v> Solver<'v> {
     /// patch to the convex hull of its corners' crossings, so the segment
     /// to every point of P crosses T there too: every vertex of P is
     /// occluded, and a ray to it would have said so (the answers, and so
-    /// the output, are unchanged; only the rays are saved).
+    /// the output, are unchanged; only the rays are saved). Vertices whose
+    /// receiver point is not the vertex (on a surface's boundary) are not
+    /// culled: that point may lie in a neighbouring patch.
     fn hidden_patches(&self, c: DVec3, shooter: SurfaceId, normal: DVec3) -> Option<Vec<u64>> {
         if !self.vis.names_blockers() {
             return None;
@@ -1211,7 +1220,12 @@ impl<'v> Solver<'v> {
             if h {
                 for e in mesh.patch_leaves(PatchId(p as u32)) {
                     for v in mesh.elem_corners(e) {
-                        bits[v.idx() / 64] |= 1 << (v.idx() % 64);
+                        // A vertex on the surface's boundary receives at a
+                        // point stepped into its surface, perhaps into a
+                        // neighbouring patch: left to the rays.
+                        if mesh.receiver_pos(*v) == mesh.vertex_pos(*v) {
+                            bits[v.idx() / 64] |= 1 << (v.idx() % 64);
+                        }
                     }
                 }
             }
@@ -1581,7 +1595,7 @@ mod tests {
                 if bits[v / 64] & (1 << (v % 64)) != 0 {
                     hidden += 1;
                     assert!(
-                        !vis.clear(c, m.vertex_pos(vid), s, m.vertex_surface(vid)),
+                        !vis.clear(c, m.receiver_pos(vid), s, m.vertex_surface(vid)),
                         "vertex {v} at {} marked hidden from {c} but visible",
                         m.vertex_pos(vid)
                     );

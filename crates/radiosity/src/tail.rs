@@ -352,7 +352,7 @@ impl Transport {
             let part: Vec<Rgb> = chunk
                 .par_iter()
                 .map(|&v| {
-                    let x = mesh.vertex_pos(v);
+                    let x = mesh.receiver_pos(v);
                     let patches = &at[count[v.idx()] as usize..count[v.idx() + 1] as usize];
                     let inward = patches
                         .iter()
@@ -390,7 +390,7 @@ impl Transport {
     /// its surface; `size` is the size of its patches.
     pub fn at(&self, mesh: &Mesh, v: VertId, inward: DVec3, size: f64, s: &[Rgb]) -> Rgb {
         let row = self.row(&Receiver {
-            x: mesh.vertex_pos(v),
+            x: mesh.receiver_pos(v),
             n: mesh.vertex_normal(v),
             surface: mesh.vertex_surface(v).0,
             inward,

@@ -9,7 +9,8 @@ use rayon::prelude::*;
 /// Answers "which of these vertices does a point on the shooter see".
 pub trait Visibility: Sync {
     /// For each candidate vertex, whether the segment from `from` (a point on
-    /// surface `shooter`) to the vertex is unobstructed.
+    /// surface `shooter`) to the vertex's receiver point
+    /// ([`Mesh::receiver_pos`]) is unobstructed.
     fn visible(
         &self,
         mesh: &Mesh,
@@ -218,7 +219,7 @@ impl Visibility for RayVisibility {
     ) -> Vec<bool> {
         candidates
             .par_iter()
-            .map(|&v| self.clear(from, mesh.vertex_pos(v), shooter, mesh.vertex_surface(v)))
+            .map(|&v| self.clear(from, mesh.receiver_pos(v), shooter, mesh.vertex_surface(v)))
             .collect()
     }
 

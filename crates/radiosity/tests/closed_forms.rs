@@ -50,10 +50,13 @@ fn one_emitter_over_a_floor_matches_the_closed_form() {
     let mut checked = 0;
     for v in 0..solver.mesh.num_vertices() {
         let v = libmesh::VertId(v as u32);
-        let p = solver.mesh.vertex_pos(v);
-        if p.z != 0.0 {
+        if solver.mesh.vertex_pos(v).z != 0.0 {
             continue;
         }
+        // Where the vertex receives: the floor's boundary vertices a hair
+        // inside the floor.
+        let p = solver.mesh.receiver_pos(v);
+        assert!(p.distance(solver.mesh.vertex_pos(v)) <= 1e-3);
         let f = rect_ff(p.x, p.y, 1.0, 0.0, 1.0, 0.0, 1.0);
         let h = solver.irradiance(v);
         for (k, e) in [2.0, 3.0, 4.0].into_iter().enumerate() {
@@ -258,13 +261,78 @@ fn receivers_on_the_shooters_edge_get_the_limit_from_inside() {
         // The limit from inside the floor (1e-9 away from the edge, toward the floor's middle).
         let inside = p + (glam::DVec3::new(0.5, 0.5, 0.0) - p).normalize() * 1e-9;
         let limit = radiosity::formfactor::point_to_polygon(inside, glam::DVec3::Z, &wall);
+        // The vertex receives a hair inside the floor (its receiver point):
+        // there exactly, and within 10⁻³ of the limit.
+        let x = solver.mesh.receiver_pos(v);
+        assert!(x.y < 1.0 && x.distance(p) < 1e-4, "{p}: receives at {x}");
+        let at_x = radiosity::formfactor::point_to_polygon(x, glam::DVec3::Z, &wall);
         let h = solver.irradiance(v)[0];
         assert!(limit > 0.1, "{p}: {limit}");
         assert!(
-            (h - limit).abs() <= 1e-4 * limit,
-            "floor vertex {p} on the wall's foot: H {h}, limit {limit}"
+            (h - at_x).abs() <= 1e-6 * at_x && (h - limit).abs() <= 1e-3 * limit,
+            "floor vertex {p} on the wall's foot: H {h}, at its receiver point {at_x}, limit {limit}"
         );
         on_edge += 1;
     }
     assert_eq!(on_edge, 5);
+}
+
+#[test]
+fn no_direct_light_reaches_past_a_partition() {
+    // Two 1 x 1 rooms' floors side by side, split by a partition 1 high (two
+    // faces back to back) on x = 1; a lamp 0.9 high over the west floor only.
+    // Every line from the lamp to the east floor crosses the partition, so
+    // after the lamp's shots no east floor vertex — the copies on the
+    // partition's foot included — has any light, while the west copies there
+    // have plenty (the partition's foot is where the light is discontinuous).
+    let src = "defmat lamp; diffuse_rgb 0 0 0; emission_rgb 1 1 1; end;\n\
+               c_rgb floor 0.5 0.5 0.5; c_rgb wall 0.5 0.5 0.5;\n\
+               v a 0 0 0; v b 1 0 0; v c 2 0 0; v d 0 1 0; v e 1 1 0; v f 2 1 0;\n\
+               v p 1 0 1; v q 1 1 1;\n\
+               v l0 0.2 0.2 0.9; v l1 0.8 0.2 0.9; v l2 0.8 0.8 0.9; v l3 0.2 0.8 0.9;\n\
+               f west (a b e d) floor; f east (b c f e) floor;\n\
+               f pw (b p q e) wall; f pe (e q p b) wall;\n\
+               f lamp (l0 l3 l2 l1) lamp;";
+    let model = patches(src, 0.25);
+    let mesh = libmesh::Mesh::from_model(&model, 1e-9).unwrap();
+    let vis = RayVisibility::new(&mesh);
+    let opts = Options {
+        max_shots: Some(4),
+        gradient: Some(1e30),
+        ..Options::default()
+    };
+    let mut solver = Solver::new(mesh, &model.materials, &vis, opts);
+    solver.solve(None, |_| {});
+    let m = &solver.mesh;
+    // The floors meet only along the partition's foot: two surfaces.
+    let east_floor = m
+        .patches()
+        .find(|&p| {
+            let c = m.patch_corners(p);
+            c.iter()
+                .all(|&v| m.vertex_pos(v).z == 0.0 && m.vertex_pos(v).x >= 1.0)
+        })
+        .map(|p| m.patch_surface(p))
+        .unwrap();
+    let (mut east, mut west_foot) = (0, 0);
+    for v in 0..m.num_vertices() {
+        let v = libmesh::VertId(v as u32);
+        let (p, x) = (m.vertex_pos(v), m.receiver_pos(v));
+        if p.z != 0.0 || m.vertex_normal(v).z < 0.5 {
+            continue;
+        }
+        let h = solver.irradiance(v);
+        if m.vertex_surface(v) == east_floor {
+            assert_eq!(h, [0.0; 3], "east floor vertex {p} (receives at {x})");
+            assert!(x.x > 1.0, "{p} receives at {x}");
+            east += 1;
+        } else if p.x == 1.0 {
+            assert!(h[0] > 0.01, "west floor vertex {p} on the foot: {h:?}");
+            west_foot += 1;
+        }
+    }
+    assert!(
+        east >= 20 && west_foot >= 5,
+        "{east} east, {west_foot} on the west foot"
+    );
 }
