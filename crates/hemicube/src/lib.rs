@@ -1181,6 +1181,25 @@ impl Visibility for Hemicube {
             .collect()
     }
 
+    fn visible_few(
+        &self,
+        mesh: &Mesh,
+        from: DVec3,
+        shooter: SurfaceId,
+        candidates: &[VertId],
+    ) -> Vec<bool> {
+        self.ray.visible(mesh, from, shooter, candidates)
+    }
+
+    fn visible_pairs(
+        &self,
+        mesh: &Mesh,
+        shooter: SurfaceId,
+        pairs: &[(DVec3, VertId)],
+    ) -> Vec<bool> {
+        self.ray.visible_pairs(mesh, shooter, pairs)
+    }
+
     fn name(&self) -> &'static str {
         "hemicube"
     }

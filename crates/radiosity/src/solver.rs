@@ -105,6 +105,12 @@ pub struct Options {
     pub penumbra_energy: f64,
     /// … unless its longest edge is already below this length (auto: half the mean patch edge).
     pub penumbra_size: Option<f64>,
+    /// A receiver that sees some of a shot's pieces (from their centres)
+    /// and not others lies in the shot's penumbra: its light from each
+    /// piece is then found by cutting the piece in four where the quarters'
+    /// centres disagree, down to 1/`penumbra_split` of the piece (rounded
+    /// up to a power of two; 1: never).
+    pub penumbra_split: usize,
     /// Elements whose radiosity differs across an edge by more than this are
     /// subdivided (§6); auto: a tenth of the scene's expected mean radiosity
     /// (emitted power per area and channel over 1 − mean reflectance).
@@ -137,8 +143,8 @@ pub struct Options {
     /// parents' (§6's rule). The mean is wrong wherever earlier light was
     /// not linear along the edge, and that error never goes away: in a
     /// closed furnace it left ±8% at the refined edges. Costs a re-shot of
-    /// the history per batch of new vertices (with the hemi-cube, a
-    /// rendering per past shot), so it is off by default for now.
+    /// the shots whose light reached the split edge (by rays), per batch of
+    /// new vertices. On by default.
     pub regather: bool,
 }
 
@@ -150,6 +156,7 @@ impl Default for Options {
             time_limit: None,
             batch: 20,
             penumbra_energy: 0.02,
+            penumbra_split: 16,
             penumbra_size: None,
             gradient: None,
             gradient_relative: 0.0,
@@ -160,7 +167,7 @@ impl Default for Options {
             tail: 5e-3,
             tail_rays: None,
             tail_refine: 1.0,
-            regather: false,
+            regather: true,
         }
     }
 }
@@ -250,6 +257,10 @@ pub struct Solver<'v> {
     /// (every vertex is shot at most once per shot, so this is exactly the ΔH
     /// added; 0 where nothing arrived). 8 bytes per vertex instead of 24.
     gain: Vec<f64>,
+    /// Scratch of a shot: bit 0, the vertex sees one of its pieces; bit 1,
+    /// a piece is hidden from it; bit 2, a corner of a leaf spanning a
+    /// shadow edge.
+    seen: Vec<u8>,
     /// The current shot's unshot radiosity ΔB.
     d_b: Rgb,
     /// Energy already shot per patch.
@@ -273,6 +284,9 @@ struct Past {
     surface: SurfaceId,
     normal: DVec3,
     d_b: Rgb,
+    /// The box of the vertices the shot reached (empty: lo > hi).
+    lo: DVec3,
+    hi: DVec3,
 }
 
 impl<'v> Solver<'v> {
@@ -332,6 +346,7 @@ impl<'v> Solver<'v> {
             emit,
             h: vec![[0.0; 3]; nv],
             gain: vec![0.0; nv],
+            seen: vec![0; nv],
             d_b: [0.0; 3],
             shot: vec![[0.0; 3]; np],
             emitted,
@@ -595,11 +610,25 @@ impl<'v> Solver<'v> {
             self.shoot_at(Targets::List(&fresh), &shooters, surface, normal);
         }
         if self.regathers() {
+            let (mesh, gain) = (&self.mesh, &self.gain);
+            let (lo, hi) = (0..mesh.num_vertices())
+                .into_par_iter()
+                .filter(|&v| gain[v] > 0.0)
+                .map(|v| {
+                    let x = mesh.vertex_pos(VertId(v as u32));
+                    (x, x)
+                })
+                .reduce(
+                    || (DVec3::INFINITY, DVec3::NEG_INFINITY),
+                    |a, b| (a.0.min(b.0), a.1.max(b.1)),
+                );
             self.history.push(Past {
                 shooters: shooters.clone(),
                 surface,
                 normal,
                 d_b,
+                lo,
+                hi,
             });
         }
 
@@ -956,14 +985,39 @@ impl<'v> Solver<'v> {
         for &v in fresh {
             self.h[v.idx()] = [0.0; 3];
         }
+        // A past shot that reached neither of a new vertex's parents (both
+        // outside the box of what it reached, and the edge between them
+        // too) gave them nothing, and the mean rule would give the vertex
+        // nothing: only the shots whose box the edge meets are re-shot.
+        let span: Vec<(DVec3, DVec3)> = fresh
+            .iter()
+            .map(|&v| match self.mesh.vertex_origin(v) {
+                libmesh::VertexOrigin::Split([a, b]) => {
+                    let (pa, pb) = (self.mesh.vertex_pos(a), self.mesh.vertex_pos(b));
+                    (pa.min(pb), pa.max(pb))
+                }
+                libmesh::VertexOrigin::Input(_) => {
+                    let x = self.mesh.vertex_pos(v);
+                    (x, x)
+                }
+            })
+            .collect();
         let history = std::mem::take(&mut self.history);
+        let mut some: Vec<VertId> = Vec::new();
         for past in &history {
-            for &v in fresh {
+            some.clear();
+            some.extend(fresh.iter().zip(&span).filter_map(|(&v, (lo, hi))| {
+                (lo.cmple(past.hi).all() && hi.cmpge(past.lo).all()).then_some(v)
+            }));
+            if some.is_empty() {
+                continue;
+            }
+            for &v in &some {
                 self.gain[v.idx()] = 0.0;
             }
             self.d_b = past.d_b;
             self.shoot_at(
-                Targets::List(fresh),
+                Targets::List(&some),
                 &past.shooters,
                 past.surface,
                 past.normal,
@@ -981,6 +1035,7 @@ impl<'v> Solver<'v> {
         let n = self.mesh.num_vertices();
         self.h.resize(n, [0.0; 3]);
         self.gain.resize(n, 0.0);
+        self.seen.resize(n, 0);
     }
 
     /// Energy received by the elements from the current shot (Σ area × mean
@@ -1088,6 +1143,7 @@ impl<'v> Solver<'v> {
             .collect();
         let mesh = &self.mesh;
         let gain = &mut self.gain;
+        let seen_flags = &mut self.seen;
         for (((poly, c), &delta), hidden) in shooters.iter().zip(&deltas).zip(&hidden) {
             let shown = |v: VertId| {
                 hidden
@@ -1099,12 +1155,22 @@ impl<'v> Solver<'v> {
                 // At most CHUNK targets at a time: the candidate lists cost 13
                 // bytes per candidate.
                 let end = (start + CHUNK_TARGETS).min(n_targets);
-                let cand: Vec<VertId> = (start..end)
-                    .map(target)
-                    .filter(|&v| candidate(v, *c, delta) && shown(v))
-                    .collect();
+                let mut cand: Vec<VertId> = Vec::new();
+                for v in (start..end).map(target) {
+                    if candidate(v, *c, delta) {
+                        if shown(v) {
+                            cand.push(v);
+                        } else {
+                            seen_flags[v.idx()] |= 2;
+                        }
+                    }
+                }
                 start = end;
-                let seen = self.vis.visible(mesh, *c, surface, &cand);
+                // A list of new vertices is short: rays, not a rendering.
+                let seen = match targets {
+                    Targets::All => self.vis.visible(mesh, *c, surface, &cand),
+                    Targets::List(_) => self.vis.visible_few(mesh, *c, surface, &cand),
+                };
                 let ff: Vec<f64> = cand
                     .par_iter()
                     .zip(&seen)
@@ -1121,6 +1187,72 @@ impl<'v> Solver<'v> {
                     if s {
                         gain[v.idx()] += f;
                     }
+                    seen_flags[v.idx()] |= if s { 1 } else { 2 };
+                }
+            }
+        }
+        // Receivers in the penumbra of this shot (some pieces seen, some
+        // not): their light again, each piece cut into sub-pieces seen from
+        // their own centres (by rays: the list is short).
+        // A shot shooting at every vertex also redoes the corners of every
+        // leaf that spans a shadow edge (corners that see all of the shot
+        // and corners that see none): a receiver can lie in a penumbra while
+        // every piece's centre agrees on it.
+        let k = self.opts.penumbra_split;
+        let split = k > 1 && shooters.len() > 1;
+        if split && matches!(targets, Targets::All) {
+            let flags = &self.seen;
+            let spanning: Vec<ElemId> = scan_leaves(&self.mesh, |e| {
+                let (mut lit, mut dark) = (false, false);
+                for &v in self.mesh.elem_corners(e) {
+                    let f = flags[v.idx()];
+                    lit |= f & 1 != 0;
+                    dark |= f & 2 != 0;
+                }
+                (lit && dark).then_some(e)
+            });
+            for e in spanning {
+                for &v in self.mesh.elem_corners(e) {
+                    if self.seen[v.idx()] != 0 {
+                        self.seen[v.idx()] |= 4;
+                    }
+                }
+            }
+        }
+        let mut mixed: Vec<VertId> = Vec::new();
+        for i in 0..n_targets {
+            let v = target(i);
+            let f = self.seen[v.idx()];
+            if split && (f & 3 == 3 || f & 4 != 0) {
+                mixed.push(v);
+            }
+            self.seen[v.idx()] = 0;
+        }
+        if !mixed.is_empty() {
+            for &v in &mixed {
+                self.gain[v.idx()] = 0.0;
+            }
+            let depth = k.next_power_of_two().trailing_zeros();
+            let mut state = Vec::new();
+            for ((poly, c), &delta) in shooters.iter().zip(&deltas) {
+                let cand: Vec<VertId> = mixed
+                    .iter()
+                    .copied()
+                    .filter(|&v| candidate(v, *c, delta))
+                    .collect();
+                if cand.is_empty() {
+                    continue;
+                }
+                let got = self.penumbra_light(
+                    poly,
+                    (*c, normal, delta, surface),
+                    &cand,
+                    depth,
+                    &nudge,
+                    &mut state,
+                );
+                for (&v, g) in cand.iter().zip(got) {
+                    self.gain[v.idx()] += g;
                 }
             }
         }
@@ -1137,6 +1269,125 @@ impl<'v> Solver<'v> {
             }
         }
         reached
+    }
+
+    /// The form factors from receivers in a penumbra to one shooter piece,
+    /// visibility sampled adaptively: the piece is cut into a 2 × 2 grid,
+    /// then 4 × 4 and so on to 2^`depth` a side, and at each level only the
+    /// cells of a receiver whose state (seen from the cell's centre or not)
+    /// differs from a neighbouring cell's are cut further; the others are
+    /// settled, whole. So the shadow's edge across the piece is found to
+    /// 2^-`depth` of the piece for the cost of the cells along it. `shot` is
+    /// the piece's centre, the shooter's normal, the §5.4 offset and the
+    /// shooter's surface; `nudge` gives the §5.4 direction of a receiver.
+    fn penumbra_light(
+        &self,
+        poly: &[DVec3],
+        shot: (DVec3, DVec3, f64, SurfaceId),
+        verts: &[VertId],
+        depth: u32,
+        nudge: &(dyn Fn(VertId) -> DVec3 + Sync),
+        state: &mut Vec<u8>,
+    ) -> Vec<f64> {
+        let (c, normal, delta, surface) = shot;
+        let mesh = &self.mesh;
+        // A triangle is the quad (p0 p1 p2 p2): the bilinear cells of a
+        // planar convex quad (or triangle) are convex and tile it.
+        let q = if poly.len() == 4 {
+            [poly[0], poly[1], poly[2], poly[3]]
+        } else {
+            [poly[0], poly[1], poly[2], poly[2]]
+        };
+        let at = |u: f64, v: f64| {
+            q[0] * ((1.0 - u) * (1.0 - v))
+                + q[1] * (u * (1.0 - v))
+                + q[2] * (u * v)
+                + q[3] * ((1.0 - u) * v)
+        };
+        let cell = |m: usize, i: usize, j: usize| -> Vec<DVec3> {
+            let (u0, u1) = (i as f64 / m as f64, (i + 1) as f64 / m as f64);
+            let (v0, v1) = (j as f64 / m as f64, (j + 1) as f64 / m as f64);
+            let mut pts = vec![at(u0, v0), at(u1, v0), at(u1, v1), at(u0, v1)];
+            pts.dedup();
+            if pts.len() > 1 && pts[0] == pts[pts.len() - 1] {
+                pts.pop();
+            }
+            pts
+        };
+        let n = 1usize << depth;
+        let nv = verts.len();
+        // Per receiver, the state of each finest cell: 1 seen, 2 hidden
+        // (every cell is written at level 1).
+        state.resize(nv * n * n, 0);
+        let mut active: Vec<Vec<(usize, usize)>> = vec![vec![(0, 0), (1, 0), (0, 1), (1, 1)]; nv];
+        // Visible settled cells: (receiver, level's cells a side, i, j).
+        let mut lit: Vec<(usize, usize, usize, usize)> = Vec::new();
+        for d in 1..=depth {
+            let m = 1usize << d;
+            let s = n / m;
+            let mut by_cell: Vec<Vec<usize>> = vec![Vec::new(); m * m];
+            for (k, cells) in active.iter().enumerate() {
+                for &(i, j) in cells {
+                    by_cell[j * m + i].push(k);
+                }
+            }
+            // Every (cell centre, receiver) pair of this level in one batch.
+            let mut pairs: Vec<(DVec3, VertId)> = Vec::new();
+            for (ci, ks) in by_cell.iter().enumerate() {
+                if ks.is_empty() {
+                    continue;
+                }
+                let pts = cell(m, ci % m, ci / m);
+                let centre = pts.iter().copied().sum::<DVec3>() / pts.len() as f64;
+                pairs.extend(ks.iter().map(|&k| (centre, verts[k])));
+            }
+            let seen = self.vis.visible_pairs(mesh, surface, &pairs);
+            let mut seen = seen.into_iter();
+            for (ci, ks) in by_cell.iter().enumerate() {
+                let (i, j) = (ci % m, ci / m);
+                for &k in ks {
+                    let st = if seen.next().unwrap_or(false) { 1 } else { 2 };
+                    let grid = &mut state[k * n * n..(k + 1) * n * n];
+                    for fj in j * s..(j + 1) * s {
+                        grid[fj * n + i * s..fj * n + (i + 1) * s].fill(st);
+                    }
+                }
+            }
+            let last = d == depth;
+            for (k, cells) in active.iter_mut().enumerate() {
+                let grid = &state[k * n * n..(k + 1) * n * n];
+                let st = |i: usize, j: usize| grid[j * s * n + i * s];
+                let mut next = Vec::new();
+                for (i, j) in std::mem::take(cells) {
+                    let me = st(i, j);
+                    let differs = (i > 0 && st(i - 1, j) != me)
+                        || (i + 1 < m && st(i + 1, j) != me)
+                        || (j > 0 && st(i, j - 1) != me)
+                        || (j + 1 < m && st(i, j + 1) != me);
+                    if differs && !last {
+                        for (di, dj) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                            next.push((2 * i + di, 2 * j + dj));
+                        }
+                    } else if me == 1 {
+                        lit.push((k, m, i, j));
+                    }
+                }
+                *cells = next;
+            }
+        }
+        let ff: Vec<f64> = lit
+            .par_iter()
+            .map(|&(k, m, i, j)| {
+                let v = verts[k];
+                let x = offset_receiver(mesh.receiver_pos(v), || nudge(v), c, normal, delta);
+                point_to_polygon(x, mesh.vertex_normal(v), &cell(m, i, j))
+            })
+            .collect();
+        let mut out = vec![0.0; nv];
+        for (&(k, ..), f) in lit.iter().zip(ff) {
+            out[k] += f;
+        }
+        out
     }
 
     /// The vertices of every patch that one triangle hides entirely from

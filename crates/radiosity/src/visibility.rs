@@ -19,6 +19,36 @@ pub trait Visibility: Sync {
         candidates: &[VertId],
     ) -> Vec<bool>;
 
+    /// [`Visibility::visible`] for a short list of candidates (a shot's
+    /// penumbra, seen from the centres of sub-pieces): an implementation
+    /// whose set-up per query is costly (a hemi-cube rendering) may answer
+    /// by rays. The default is `visible`.
+    fn visible_few(
+        &self,
+        mesh: &Mesh,
+        from: DVec3,
+        shooter: SurfaceId,
+        candidates: &[VertId],
+    ) -> Vec<bool> {
+        self.visible(mesh, from, shooter, candidates)
+    }
+
+    /// For each (point on surface `shooter`, vertex) pair, whether the
+    /// segment between them is unobstructed: many sample points of one
+    /// shooter at once (a penumbra's cells). The default asks
+    /// [`Visibility::visible_few`] pair by pair.
+    fn visible_pairs(
+        &self,
+        mesh: &Mesh,
+        shooter: SurfaceId,
+        pairs: &[(DVec3, VertId)],
+    ) -> Vec<bool> {
+        pairs
+            .iter()
+            .map(|&(from, v)| self.visible_few(mesh, from, shooter, &[v])[0])
+            .collect()
+    }
+
     /// A short name for messages (`ray`, `hemicube`).
     fn name(&self) -> &'static str;
 
@@ -220,6 +250,20 @@ impl Visibility for RayVisibility {
         candidates
             .par_iter()
             .map(|&v| self.clear(from, mesh.receiver_pos(v), shooter, mesh.vertex_surface(v)))
+            .collect()
+    }
+
+    fn visible_pairs(
+        &self,
+        mesh: &Mesh,
+        shooter: SurfaceId,
+        pairs: &[(DVec3, VertId)],
+    ) -> Vec<bool> {
+        pairs
+            .par_iter()
+            .map(|&(from, v)| {
+                self.clear(from, mesh.receiver_pos(v), shooter, mesh.vertex_surface(v))
+            })
             .collect()
     }
 
