@@ -476,7 +476,13 @@ fn the_tail_agrees_with_shooting_patch_by_patch_on_the_cornell_box() {
     let log = String::from_utf8_lossy(&tail.stderr);
     assert!(log.contains("indirect tail after shot"), "{log}");
     assert!(log.contains("every patch tried"), "{log}");
-    let shots = run("ugrad", &["-v", "--tail", "0"], Some(input.as_bytes()));
+    // (§6's mean for new vertices, as when the figures were measured: the
+    // re-shot costs this 3,600-shot run half a minute in a debug build.)
+    let shots = run(
+        "ugrad",
+        &["-v", "--tail", "0", "--no-regather"],
+        Some(input.as_bytes()),
+    );
     assert!(shots.status.success());
     let log = String::from_utf8_lossy(&shots.stderr);
     assert!(!log.contains("indirect tail"), "{log}");

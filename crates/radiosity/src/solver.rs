@@ -72,6 +72,10 @@ fn sum(a: Rgb) -> f64 {
 
 /// Leaves handled per parallel batch when scanning all leaves.
 const CHUNK: usize = 1 << 16;
+/// Shots kept for re-shooting at new vertices beyond the emitters' first
+/// light (see `Solver::regather`).
+const HISTORY_CAP: usize = 64;
+
 /// Targets handled per visibility query.
 const CHUNK_TARGETS: usize = 1 << 20;
 
@@ -276,6 +280,8 @@ pub struct Solver<'v> {
     pub tail: Option<TailStats>,
     /// Every shot so far, for re-gathering at new vertices.
     history: Vec<Past>,
+    /// Whether every shot so far is in the history.
+    history_complete: bool,
 }
 
 /// A shot as shot: its pieces, surface, normal and unshot radiosity.
@@ -358,6 +364,7 @@ impl<'v> Solver<'v> {
             shots: Vec::new(),
             tail: None,
             history: Vec::new(),
+            history_complete: true,
         }
     }
 
@@ -494,6 +501,7 @@ impl<'v> Solver<'v> {
     /// Shoots one patch's unshot energy; `None` when it has none.
     pub fn shoot(&mut self, p: PatchId) -> Option<ShotStats> {
         let t0 = Instant::now();
+        let first_light = !self.emitters_shot();
         self.grow();
         let d_phi = self.unshot(p);
         let energy = sum(d_phi);
@@ -522,7 +530,7 @@ impl<'v> Solver<'v> {
                     }
                     if self.regathers() {
                         let fresh: Vec<VertId> = split.new_vertices.iter().map(|nv| nv.v).collect();
-                        self.regather(&fresh);
+                        self.regather(&fresh, false);
                     }
                 }
                 if let Some(children) = self.mesh.elem_children(e) {
@@ -600,8 +608,8 @@ impl<'v> Solver<'v> {
                 break;
             }
             if self.regathers() {
-                // Exact light from every earlier shot, then this one.
-                self.regather(&fresh);
+                // Exact light from the earlier shots, then this one.
+                self.regather(&fresh, true);
                 for &v in &fresh {
                     self.gain[v.idx()] = 0.0;
                 }
@@ -622,14 +630,21 @@ impl<'v> Solver<'v> {
                     || (DVec3::INFINITY, DVec3::NEG_INFINITY),
                     |a, b| (a.0.min(b.0), a.1.max(b.1)),
                 );
-            self.history.push(Past {
-                shooters: shooters.clone(),
-                surface,
-                normal,
-                d_b,
-                lo,
-                hi,
-            });
+            // The emitters' first light, and the first shots: a long run
+            // without the tail (`--tail 0`) keeps the rest out, and new
+            // vertices take their share by §6's mean (see `regather`).
+            if self.history.len() < HISTORY_CAP || first_light {
+                self.history.push(Past {
+                    shooters: shooters.clone(),
+                    surface,
+                    normal,
+                    d_b,
+                    lo,
+                    hi,
+                });
+            } else {
+                self.history_complete = false;
+            }
         }
 
         let (received, reflected) = self.received();
@@ -975,28 +990,59 @@ impl<'v> Solver<'v> {
         self.opts.regather && self.tail.is_none()
     }
 
-    /// Sets the irradiance of `fresh` (new vertices) to what every shot in
-    /// the history brought them, re-shooting each at them alone. Leaves
-    /// `d_b` and their gains to the caller.
-    fn regather(&mut self, fresh: &[VertId]) {
+    /// Sets the irradiance of `fresh` (new vertices, in id order, parents
+    /// first) from the history, re-shooting each past shot at them alone:
+    /// exactly what the history brought them when the history holds every
+    /// shot; otherwise §6's mean of their parents' light for the shots left
+    /// out, the history's exactly (the history's own share at the parents is
+    /// re-shot too, and taken out of the mean). `current`: the parents'
+    /// irradiance includes the shot in progress (its gains), which is left
+    /// out. Leaves `d_b` and the new vertices' gains to the caller.
+    fn regather(&mut self, fresh: &[VertId], current: bool) {
         if fresh.is_empty() {
             return;
         }
-        for &v in fresh {
+        let parents_of = |s: &Self, v: VertId| match s.mesh.vertex_origin(v) {
+            libmesh::VertexOrigin::Split(ab) => Some(ab),
+            libmesh::VertexOrigin::Input(_) => None,
+        };
+        let is_fresh = |v: VertId| fresh.binary_search(&v).is_ok();
+        // The parents outside `fresh`, when the history is not every shot.
+        let mut parents: Vec<VertId> = Vec::new();
+        if !self.history_complete {
+            parents = fresh
+                .iter()
+                .filter_map(|&v| parents_of(self, v))
+                .flatten()
+                .filter(|&x| !is_fresh(x))
+                .collect();
+            parents.sort_unstable();
+            parents.dedup();
+        }
+        let saved: Vec<(Rgb, f64, Rgb)> = parents
+            .iter()
+            .map(|&x| {
+                let cur = if current { self.dh(x) } else { [0.0; 3] };
+                (self.h[x.idx()], self.gain[x.idx()], cur)
+            })
+            .collect();
+        let mut targets: Vec<VertId> = fresh.iter().chain(&parents).copied().collect();
+        targets.sort_unstable();
+        for &v in &targets {
             self.h[v.idx()] = [0.0; 3];
         }
         // A past shot that reached neither of a new vertex's parents (both
         // outside the box of what it reached, and the edge between them
         // too) gave them nothing, and the mean rule would give the vertex
         // nothing: only the shots whose box the edge meets are re-shot.
-        let span: Vec<(DVec3, DVec3)> = fresh
+        let span: Vec<(DVec3, DVec3)> = targets
             .iter()
-            .map(|&v| match self.mesh.vertex_origin(v) {
-                libmesh::VertexOrigin::Split([a, b]) => {
+            .map(|&v| match parents_of(self, v) {
+                Some([a, b]) if is_fresh(v) => {
                     let (pa, pb) = (self.mesh.vertex_pos(a), self.mesh.vertex_pos(b));
                     (pa.min(pb), pa.max(pb))
                 }
-                libmesh::VertexOrigin::Input(_) => {
+                _ => {
                     let x = self.mesh.vertex_pos(v);
                     (x, x)
                 }
@@ -1006,7 +1052,7 @@ impl<'v> Solver<'v> {
         let mut some: Vec<VertId> = Vec::new();
         for past in &history {
             some.clear();
-            some.extend(fresh.iter().zip(&span).filter_map(|(&v, (lo, hi))| {
+            some.extend(targets.iter().zip(&span).filter_map(|(&v, (lo, hi))| {
                 (lo.cmple(past.hi).all() && hi.cmpge(past.lo).all()).then_some(v)
             }));
             if some.is_empty() {
@@ -1024,6 +1070,36 @@ impl<'v> Solver<'v> {
             );
         }
         self.history = history;
+        if parents.is_empty() && self.history_complete {
+            return;
+        }
+        // The history's share S at every target; the parents' own values back.
+        let share: Vec<Rgb> = targets.iter().map(|&v| self.h[v.idx()]).collect();
+        let s_of = |v: VertId| share[targets.binary_search(&v).expect("a target")];
+        for (&x, &(h, g, _)) in parents.iter().zip(&saved) {
+            self.h[x.idx()] = h;
+            self.gain[x.idx()] = g;
+        }
+        for &v in fresh {
+            let Some([a, b]) = parents_of(self, v) else {
+                continue; // S(v) already
+            };
+            let base = |s: &Self, x: VertId| -> Rgb {
+                if is_fresh(x) {
+                    s.h[x.idx()]
+                } else {
+                    let (h, _, cur) = saved[parents.binary_search(&x).expect("a parent")];
+                    [h[0] - cur[0], h[1] - cur[1], h[2] - cur[2]]
+                }
+            };
+            let (ba, bb) = (base(self, a), base(self, b));
+            let (sa, sb, sv) = (s_of(a), s_of(b), s_of(v));
+            let mut out = [0.0; 3];
+            for k in 0..3 {
+                out[k] = (0.5 * ((ba[k] - sa[k]) + (bb[k] - sb[k])) + sv[k]).max(0.0);
+            }
+            self.h[v.idx()] = out;
+        }
     }
 
     fn dh(&self, v: VertId) -> Rgb {
