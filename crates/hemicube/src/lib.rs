@@ -1042,7 +1042,6 @@ impl Hemicube {
         // A vertex on its surface's boundary receives a hair inside its
         // surface (`Mesh::receiver_pos`), within a pixel of the border of a
         // face standing there: questionable by construction.
-        let stepped = |v: VertId| mesh.receiver_pos(v) != mesh.vertex_pos(v);
         let mut out = match self.opts.method {
             Method::Depth => {
                 let f = self.depth_flags(&s, &sh, &rel_s)?;
@@ -1071,7 +1070,7 @@ impl Hemicube {
             }
         };
         for (q, &v) in out.questionable.iter_mut().zip(candidates) {
-            *q |= stepped(v);
+            *q |= mesh.receiver_stepped(v);
         }
         Ok(out)
     }

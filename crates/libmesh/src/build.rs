@@ -305,17 +305,15 @@ impl Mesh {
             let r = &raw[p as usize];
             r.cls[k as usize] < r.cls[(k as usize + 1) % r.n]
         };
+        // Every corner of `b` within eps of `a`'s plane.
+        let in_plane = |a: &RawPatch, b: &RawPatch| {
+            let n = a.unit();
+            b.cls[..b.n]
+                .iter()
+                .all(|&k| (classes.rep_pos[k as usize] - a.centroid).dot(n).abs() <= eps)
+        };
         let coplanar = |a: &RawPatch, b: &RawPatch| {
-            let (na, nb) = (a.unit(), b.unit());
-            if na.dot(nb) <= 0.0 {
-                return false;
-            }
-            let near = |r: &RawPatch, n: DVec3, c: DVec3| {
-                r.cls[..r.n]
-                    .iter()
-                    .all(|&k| (classes.rep_pos[k as usize] - c).dot(n).abs() <= eps)
-            };
-            near(b, na, a.centroid) && near(a, nb, b.centroid)
+            a.unit().dot(b.unit()) > 0.0 && in_plane(a, b) && in_plane(b, a)
         };
         let joins = |x: &(u32, u32, u32, u8), y: &(u32, u32, u32, u8)| {
             let (a, b) = (&raw[x.2 as usize], &raw[y.2 as usize]);
@@ -333,12 +331,6 @@ impl Mesh {
         // side's vertices may be shared with the other's.
         // (Patches lying in the plane of the pair — the back of a two-sided
         // wall sharing its vertices — do not break the join.)
-        let in_plane = |a: &RawPatch, b: &RawPatch| {
-            let n = a.unit();
-            b.cls[..b.n]
-                .iter()
-                .all(|&k| (classes.rep_pos[k as usize] - a.centroid).dot(n).abs() <= eps)
-        };
         let mut adjacent: Vec<[(u32, u8); 2]> = Vec::new();
         for g in &groups {
             let a = &raw[g[0].2 as usize];
@@ -461,9 +453,9 @@ impl Mesh {
                 let ri = &raw[pi as usize];
                 let (c0, c1) = (ri.cls[ki], ri.cls[(ki + 1) % ri.n]);
                 let own = [copy_at(pi, c0), copy_at(pi, c1)];
-                for (j, gj) in g.iter().enumerate() {
+                for gj in g.iter() {
                     let pj = gj.2;
-                    if pi == pj || j == i {
+                    if pi == pj {
                         continue;
                     }
                     let t = [copy_at(pj, c0), copy_at(pj, c1)];

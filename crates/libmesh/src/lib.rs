@@ -360,6 +360,12 @@ impl Mesh {
         self.pos[v.idx()] + glam::Vec3::from_array(self.nudge[v.idx()]).as_dvec3()
     }
 
+    /// Whether the vertex's receiver point is not the vertex itself (it
+    /// lies on its surface's boundary).
+    pub fn receiver_stepped(&self, v: VertId) -> bool {
+        self.nudge[v.idx()] != [0.0; 3]
+    }
+
     pub fn vertex_surface(&self, v: VertId) -> SurfaceId {
         SurfaceId(self.vsurf[v.idx()])
     }

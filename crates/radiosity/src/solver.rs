@@ -280,8 +280,6 @@ pub struct Solver<'v> {
     pub tail: Option<TailStats>,
     /// Every shot so far, for re-gathering at new vertices.
     history: Vec<Past>,
-    /// Whether every shot so far is in the history.
-    history_complete: bool,
 }
 
 /// A shot as shot: its pieces, surface, normal and unshot radiosity.
@@ -364,7 +362,6 @@ impl<'v> Solver<'v> {
             shots: Vec::new(),
             tail: None,
             history: Vec::new(),
-            history_complete: true,
         }
     }
 
@@ -617,7 +614,10 @@ impl<'v> Solver<'v> {
             }
             self.shoot_at(Targets::List(&fresh), &shooters, surface, normal);
         }
-        if self.regathers() {
+        // The emitters' first light, and the first shots: a long run
+        // without the tail (`--tail 0`) keeps the rest out, and new vertices
+        // take their share by §6's mean (see `regather`).
+        if self.regathers() && (self.history.len() < HISTORY_CAP || first_light) {
             let (mesh, gain) = (&self.mesh, &self.gain);
             let (lo, hi) = (0..mesh.num_vertices())
                 .into_par_iter()
@@ -630,21 +630,14 @@ impl<'v> Solver<'v> {
                     || (DVec3::INFINITY, DVec3::NEG_INFINITY),
                     |a, b| (a.0.min(b.0), a.1.max(b.1)),
                 );
-            // The emitters' first light, and the first shots: a long run
-            // without the tail (`--tail 0`) keeps the rest out, and new
-            // vertices take their share by §6's mean (see `regather`).
-            if self.history.len() < HISTORY_CAP || first_light {
-                self.history.push(Past {
-                    shooters: shooters.clone(),
-                    surface,
-                    normal,
-                    d_b,
-                    lo,
-                    hi,
-                });
-            } else {
-                self.history_complete = false;
-            }
+            self.history.push(Past {
+                shooters: shooters.clone(),
+                surface,
+                normal,
+                d_b,
+                lo,
+                hi,
+            });
         }
 
         let (received, reflected) = self.received();
@@ -1007,9 +1000,12 @@ impl<'v> Solver<'v> {
             libmesh::VertexOrigin::Input(_) => None,
         };
         let is_fresh = |v: VertId| fresh.binary_search(&v).is_ok();
+        // Every shot so far is in the history (the shot in progress is in
+        // neither list yet; regathering stops when the tail runs).
+        let complete = self.history.len() == self.shots.len();
         // The parents outside `fresh`, when the history is not every shot.
         let mut parents: Vec<VertId> = Vec::new();
-        if !self.history_complete {
+        if !complete {
             parents = fresh
                 .iter()
                 .filter_map(|&v| parents_of(self, v))
@@ -1070,7 +1066,7 @@ impl<'v> Solver<'v> {
             );
         }
         self.history = history;
-        if parents.is_empty() && self.history_complete {
+        if complete {
             return;
         }
         // The history's share S at every target; the parents' own values back.
@@ -1268,12 +1264,11 @@ impl<'v> Solver<'v> {
             }
         }
         // Receivers in the penumbra of this shot (some pieces seen, some
-        // not): their light again, each piece cut into sub-pieces seen from
-        // their own centres (by rays: the list is short).
-        // A shot shooting at every vertex also redoes the corners of every
-        // leaf that spans a shadow edge (corners that see all of the shot
-        // and corners that see none): a receiver can lie in a penumbra while
-        // every piece's centre agrees on it.
+        // not) find their light again (`penumbra_light`). A shot at every
+        // vertex also redoes the corners of every leaf that spans a shadow
+        // edge (corners that see all of the shot and corners that see none):
+        // a receiver can lie in a penumbra while every piece's centre agrees
+        // on it.
         let k = self.opts.penumbra_split;
         let split = k > 1 && shooters.len() > 1;
         if split && matches!(targets, Targets::All) {
@@ -1550,7 +1545,7 @@ impl<'v> Solver<'v> {
                         // A vertex on the surface's boundary receives at a
                         // point stepped into its surface, perhaps into a
                         // neighbouring patch: left to the rays.
-                        if mesh.receiver_pos(*v) == mesh.vertex_pos(*v) {
+                        if !mesh.receiver_stepped(*v) {
                             bits[v.idx() / 64] |= 1 << (v.idx() % 64);
                         }
                     }
