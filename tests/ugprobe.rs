@@ -444,5 +444,8 @@ fn cornell_box_through_the_chain_is_within_two_percent_rms_of_ugprobe() {
     // rms² ≈ true rms² + se²: the estimate's own noise is about 0.8%.
     assert!(se < 1.0, "{out}");
     assert!(rms < 2.0, "rms {rms}%\n{out}");
-    assert!(max < 5.0, "max {max}%\n{out}");
+    // The tail's light at split vertices is checked against exact gathers
+    // (1.26% rms, 2.64% max measured; before, the mean of the parents left
+    // the floor beside the short block 4.6% dark).
+    assert!(max < 3.5, "max {max}%\n{out}");
 }

@@ -395,7 +395,7 @@ fn main() -> std::process::ExitCode {
         }
         if let Some(t) = &solver.tail {
             c.verbose(format!(
-                "indirect tail after shot {}: {} patch centres ({} pairs stored, {:.1} MB with the geometry; {}), {} iterations; unshot {:.3e} -> {:.3e}; {} corners gathered; {:.2} s to build, {:.3} s to iterate, {:.2} s for the corners; {} elements refined after it, {} vertices gathered, {:.2} s",
+                "indirect tail after shot {}: {} patch centres ({} pairs stored, {:.1} MB with the geometry; {}), {} iterations; unshot {:.3e} -> {:.3e}; {} corners gathered; {:.2} s to build, {:.3} s to iterate, {:.2} s for the corners; {} split vertices checked, {:.2} s; {} elements refined after it, {} vertices gathered, {:.2} s",
                 t.after_shots,
                 solver.mesh.num_patches(),
                 t.pairs,
@@ -412,6 +412,8 @@ fn main() -> std::process::ExitCode {
                 t.build_seconds,
                 t.iterate_seconds,
                 t.corner_seconds,
+                t.checked,
+                t.check_seconds,
                 t.refined,
                 t.regathered,
                 t.refine_seconds

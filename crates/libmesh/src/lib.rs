@@ -215,6 +215,13 @@ pub(crate) const INTERIOR: u16 = 7;
 /// patch's, far below any useful element size, and well above f64 precision).
 pub const MAX_LEVEL: u32 = 30;
 
+/// A split's children are at least this many build epsilons across: an
+/// element whose shortest edge or width is below twice this is not split,
+/// nor is one whose split would need such an element split first (balance).
+/// Without it a sliver beside a refined element is halved until its edges
+/// are below epsilon (zero-length edges in the output).
+pub const MIN_CHILD_EPS: f64 = 16.0;
+
 /// One quadtree node: 32 bytes, no heap allocation.
 #[derive(Clone, Copy, Debug)]
 #[repr(C)]
@@ -548,6 +555,74 @@ impl Mesh {
         (0..n)
             .map(|k| self.pos[el.v[k].idx()].distance(self.pos[el.v[(k + 1) % n].idx()]))
             .fold(0.0, f64::max)
+    }
+
+    /// The element's width: the least, over its edges, of the farthest
+    /// corner's distance from the edge's line, or its shortest edge when that
+    /// is less.
+    pub fn elem_width(&self, e: ElemId) -> f64 {
+        let el = &self.elems[e.idx()];
+        let n = el.n();
+        let p = |k: usize| self.pos[el.v[k % n].idx()];
+        let mut w = f64::INFINITY;
+        for k in 0..n {
+            let (a, b) = (p(k), p(k + 1));
+            let d = b - a;
+            let len = d.length();
+            w = w.min(len);
+            if len == 0.0 {
+                continue;
+            }
+            let far = (2..n)
+                .map(|i| d.cross(p(k + i) - a).length() / len)
+                .fold(0.0, f64::max);
+            w = w.min(far);
+        }
+        w
+    }
+
+    /// Whether [`Mesh::split`] would split leaf `e`: it is a leaf below
+    /// [`MAX_LEVEL`], and neither it nor any element balance would split
+    /// first is narrower than `2 ×` [`MIN_CHILD_EPS`] build epsilons.
+    pub fn can_split(&self, e: ElemId) -> bool {
+        match self.elems.get(e.idx()) {
+            Some(el) if el.is_leaf() && (el.level as u32) < MAX_LEVEL => self.splittable(e.0),
+            _ => false,
+        }
+    }
+
+    pub(crate) fn splittable(&self, e: u32) -> bool {
+        let floor = MIN_CHILD_EPS * self.eps;
+        if self.elem_width(ElemId(e)) < 2.0 * floor {
+            return false;
+        }
+        let el = &self.elems[e as usize];
+        let n = el.n();
+        let pos = |v: VertId| self.pos[v.idx()];
+        (0..n).all(|k| match self.across(e, k) {
+            Some((q, j)) => {
+                let qe = &self.elems[q as usize];
+                if !qe.is_leaf() {
+                    return true;
+                }
+                // The neighbour gets a vertex on its edge j, half our edge
+                // from its ends: the triangles its output fans to that vertex
+                // are at least (half edge × apex height / longest edge) wide.
+                let half = 0.5 * pos(el.v[k]).distance(pos(el.v[(k + 1) % n]));
+                let m = qe.n();
+                let (a, b) = (pos(qe.v[j]), pos(qe.v[(j + 1) % m]));
+                let d = (b - a).normalize_or_zero();
+                let apex = (2..m)
+                    .map(|i| d.cross(pos(qe.v[(j + i) % m]) - a).length())
+                    .fold(f64::INFINITY, f64::min);
+                let longest = self.elem_longest_edge(ElemId(q));
+                if half * apex < 0.25 * floor * longest {
+                    return false;
+                }
+                qe.level >= el.level || self.splittable(q)
+            }
+            None => true,
+        })
     }
 
     /// Mean of the element's corners.

@@ -94,7 +94,8 @@ impl Mesh {
     /// neighbour that would end up two levels coarser than `e`'s children, and
     /// stitching every vertex put on a surface boundary into the neighbouring
     /// surfaces. Does nothing for an element that is not a leaf (or not an
-    /// element), or a leaf at [`MAX_LEVEL`].
+    /// element), a leaf at [`MAX_LEVEL`], or one [`Mesh::can_split`] refuses
+    /// (too narrow, or a neighbour balance would split is).
     pub fn split(&mut self, e: ElemId) -> Split {
         let mut s = Split::default();
         self.split_into(e, &mut s);
@@ -107,6 +108,9 @@ impl Mesh {
         match self.elems.get(e.idx()) {
             Some(el) if el.is_leaf() && (el.level as u32) < MAX_LEVEL => {}
             _ => return,
+        }
+        if !self.splittable(e.0) {
+            return;
         }
         self.refine(e.0, out);
         // `e` was split last, after the neighbours balance required.

@@ -812,3 +812,44 @@ fn a_partition_foot_gets_a_vertex_copy_per_side() {
     };
     assert!(split.num_vertices() > m.num_vertices());
 }
+
+#[test]
+fn a_sliver_beside_a_refined_element_is_not_split_below_epsilon() {
+    // A unit square and, on its edge x = 1, a sliver 40 epsilons wide: a
+    // triangle with its apex off the edge's middle (it may be split once), and
+    // one with a short edge at the top (it may not be split at all).
+    let w = 40.0 * EPS;
+    for (apex, sliver_leaves, square_level) in [((1.0 + w, 0.5), 4, 2), ((1.0 + w, 1.0), 4, 3)] {
+        let src = format!(
+            "c_rgb grey 0.5 0.5 0.5;
+             v a 0 0 0; v b 1 0 0; v c 1 1 0; v d 0 1 0; v s {} {} 0;
+             f q (a b c d) grey; f t (b s c) grey;",
+            apex.0, apex.1
+        );
+        let (src, mut m) = mesh(&src);
+        assert_eq!(m.num_surfaces(), 1);
+        // Refine the square towards the sliver as far as it will go.
+        let near = DVec3::new(0.999, 0.3, 0.0);
+        let mut levels = Vec::new();
+        for _ in 0..20 {
+            let e = leaf_at(&m, PatchId(0), near);
+            levels.push(m.elem_level(e));
+            m.split(e);
+        }
+        m.validate().unwrap();
+        assert!(m.unbalanced_pairs(PatchId(0)).is_empty());
+        assert!(m.unbalanced_pairs(PatchId(1)).is_empty());
+        assert_eq!(m.patch_leaves(PatchId(1)).len(), sliver_leaves, "{apex:?}");
+        // The square stops where a vertex on the sliver's edge would make its
+        // output triangles narrower than 4 epsilons.
+        assert_eq!(*levels.last().unwrap(), 2, "{apex:?}: {levels:?}");
+        assert!(!m.can_split(leaf_at(&m, PatchId(0), near)));
+        for e in m.leaves() {
+            assert!(m.elem_width(e) >= MIN_CHILD_EPS * EPS, "{}", m.elem_width(e));
+        }
+        let total: f64 = m.leaves().map(|e| m.elem_area(e)).sum();
+        let want = 1.0 + 0.5 * w;
+        assert!((total - want).abs() < 1e-12);
+        ugcheck_clean(&src, &m);
+    }
+}

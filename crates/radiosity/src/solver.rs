@@ -230,6 +230,10 @@ pub struct TailStats {
     pub build_seconds: f64,
     pub iterate_seconds: f64,
     pub corner_seconds: f64,
+    /// Split vertices that gathered the tail exactly where their parents'
+    /// mean was in doubt, and the time it took.
+    pub checked: usize,
+    pub check_seconds: f64,
     /// Elements split after the tail where its light was not linear, the
     /// new vertices that gathered it exactly, and the time it took.
     pub refined: usize,
@@ -248,6 +252,8 @@ enum TailEnd {
 
 /// At most this many tail iterations (ρ near 1 in a closed scene converges
 /// slowly; the progressive loop takes over after them).
+/// See [`Solver::check_tail_interpolation`].
+const TAIL_CHECK: f64 = 0.005;
 const TAIL_ITERATIONS: usize = 10_000;
 
 /// A progressive radiosity solution in progress.
@@ -517,7 +523,10 @@ impl<'v> Solver<'v> {
         let mut stack = vec![self.mesh.patch_root(p)];
         while let Some(e) = stack.pop() {
             let share = energy * self.mesh.elem_area(e) / area;
-            if share > limit && self.mesh.elem_longest_edge(e) > self.penumbra_size {
+            if share > limit
+                && self.mesh.elem_longest_edge(e) > self.penumbra_size
+                && (!self.mesh.elem_is_leaf(e) || self.mesh.can_split(e))
+            {
                 if self.mesh.elem_is_leaf(e) {
                     let split = self.mesh.split(e);
                     self.grow();
@@ -568,6 +577,7 @@ impl<'v> Solver<'v> {
                 let c = this.mesh.elem_corners(e);
                 if !c.iter().any(|&v| sum(this.dh(v)) > 0.0)
                     || this.mesh.elem_longest_edge(e) <= min_edge
+                    || !this.mesh.can_split(e)
                 {
                     return None;
                 }
@@ -828,6 +838,9 @@ impl<'v> Solver<'v> {
             t_all[v] = t;
             self.h[v] = add(self.h[v], t);
         }
+        let t_check = Instant::now();
+        let checked = self.check_tail_interpolation(&tr, &shot_b, &mut t_all, &centre_of, &cancel);
+        let check_seconds = t_check.elapsed().as_secs_f64();
         // §6 for the tail's light: split where the radiosity is not linear
         // across an element, each new vertex gathering the tail exactly.
         let t3 = Instant::now();
@@ -861,10 +874,105 @@ impl<'v> Solver<'v> {
             corner_seconds,
             refined: refined.0,
             regathered: refined.1,
+            checked,
+            check_seconds,
             refine_seconds,
             bytes,
         });
         end
+    }
+
+    /// The tail's light at split vertices is first their parents' mean;
+    /// where that is wrong (the field is not linear: beside a box, at a
+    /// wall's foot), deeper vertices are wrong too. So, level by level from
+    /// the patches' first split down: the vertices of the first level, and
+    /// of each deeper level those with a parent whose exact gather differed
+    /// from its mean by more than [`TAIL_CHECK`] of its irradiance, gather
+    /// the tail exactly; the vertices below take the new means. Returns the
+    /// vertices gathered.
+    fn check_tail_interpolation(
+        &mut self,
+        tr: &crate::tail::Transport,
+        shot_b: &[Rgb],
+        t_all: &mut [Rgb],
+        centre_of: &rustc_hash::FxHashMap<u32, u32>,
+        cancel: &(dyn Fn() -> bool + Sync),
+    ) -> usize {
+        let nv = self.mesh.num_vertices();
+        let parents = |v: usize| match self.mesh.vertex_origin(VertId(v as u32)) {
+            libmesh::VertexOrigin::Split([a, b]) if !centre_of.contains_key(&(v as u32)) => {
+                Some((a.idx(), b.idx()))
+            }
+            _ => None,
+        };
+        let mut depth = vec![0u8; nv];
+        let mut patch_of = vec![u32::MAX; nv];
+        for e in self.mesh.leaves() {
+            for &v in self.mesh.elem_corners(e) {
+                patch_of[v.idx()] = self.mesh.elem_patch(e).0;
+            }
+        }
+        for v in 0..nv {
+            if let libmesh::VertexOrigin::Split([a, b]) = self.mesh.vertex_origin(VertId(v as u32)) {
+                depth[v] = depth[a.idx()].max(depth[b.idx()]).saturating_add(1);
+                if patch_of[v] == u32::MAX {
+                    patch_of[v] = patch_of[a.idx()].min(patch_of[b.idx()]);
+                }
+            }
+        }
+        let mut flagged = vec![false; nv];
+        let mut exact = vec![false; nv];
+        let mut gathered = 0;
+        for d in 1..=u8::MAX {
+            if cancel() {
+                break;
+            }
+            let ids: Vec<VertId> = (0..nv)
+                .filter(|&v| {
+                    depth[v] == d
+                        && patch_of[v] != u32::MAX
+                        && parents(v).is_some_and(|(a, b)| d == 1 || flagged[a] || flagged[b])
+                })
+                .map(|v| VertId(v as u32))
+                .collect();
+            if ids.is_empty() {
+                break;
+            }
+            let dirs = self.inward(&ids);
+            let mesh = &self.mesh;
+            let got: Vec<Rgb> = ids
+                .par_iter()
+                .zip(&dirs)
+                .map(|(&v, &inward)| {
+                    let size = tr.patch_size(libmesh::PatchId(patch_of[v.idx()]));
+                    tr.at(mesh, v, inward, size, shot_b)
+                })
+                .collect();
+            gathered += ids.len();
+            for (&v, t) in ids.iter().zip(got) {
+                let i = v.idx();
+                let (h, old) = (self.h[i], t_all[i]);
+                let h = [h[0] - old[0] + t[0], h[1] - old[1] + t[1], h[2] - old[2] + t[2]];
+                let diff: f64 = (0..3).map(|k| (t[k] - old[k]).abs()).sum();
+                flagged[i] = diff > TAIL_CHECK * sum(h).max(f64::MIN_POSITIVE);
+                exact[i] = true;
+                self.h[i] = h;
+                t_all[i] = t;
+            }
+            // The vertices below take their parents' new mean.
+            for v in 0..nv {
+                if depth[v] <= d || exact[v] {
+                    continue;
+                }
+                if let Some((a, b)) = parents(v) {
+                    let t = scale(add(t_all[a], t_all[b]), 0.5);
+                    let (h, old) = (self.h[v], t_all[v]);
+                    self.h[v] = [h[0] - old[0] + t[0], h[1] - old[1] + t[1], h[2] - old[2] + t[2]];
+                    t_all[v] = t;
+                }
+            }
+        }
+        gathered
     }
 
     /// Splits the leaves across one of whose edges the tail's reflected
@@ -894,6 +1002,7 @@ impl<'v> Solver<'v> {
                 let c = this.mesh.elem_corners(e);
                 if !c.iter().any(|&v| sum(t[v.idx()]) > 0.0)
                     || this.mesh.elem_longest_edge(e) <= min_edge
+                    || !this.mesh.can_split(e)
                 {
                     return None;
                 }

@@ -27,7 +27,12 @@
 //!   one gather of the sum equals the sum of the gathers); its row is
 //!   computed, used and dropped. An element vertex takes the tail's
 //!   irradiance interpolated from its patch's corners (each split vertex the
-//!   mean of its parents: linear along edges, bilinear in quads).
+//!   mean of its parents: linear along edges, bilinear in quads), and is
+//!   then checked: the vertices of each patch's first split gather exactly,
+//!   and level by level, so do the vertices below one whose exact value
+//!   differed from the mean by more than 0.5% of its irradiance (on the
+//!   Cornell box at `-l 3%` a floor vertex beside the short block was 10%
+//!   dark from the mean; 2,817 of 7,728 split vertices gathered).
 //! * **Refinement** (§6 for the tail's light): then every leaf element
 //!   across one of whose edges the tail's reflected light (ρ × its
 //!   irradiance) is steep by the gradient rule is split, down to the
