@@ -113,10 +113,11 @@ struct Args {
     /// else 512).
     #[arg(long, value_name = "N")]
     tail_rays: Option<usize>,
-    /// After the tail, split elements where its reflected light is steep
-    /// (the gradient rule) and gather it exactly at the new vertices, the
-    /// steepest first, at most this many times as many vertices as the
-    /// patch corners that gathered it (0: never).
+    /// After the tail, gather it exactly at split vertices where their
+    /// parents' mean is in doubt (level by level), then split elements where
+    /// its reflected light is steep (the gradient rule) and gather it at the
+    /// new vertices, the steepest first: each at most this many times as
+    /// many vertices as the patch corners that gathered it (0: never).
     #[arg(long, default_value_t = 1.0, value_name = "FRACTION", value_parser = cli::parse_epsilon)]
     tail_refine: f64,
     /// How visibility is decided. auto: the hemi-cube on a hardware GPU,

@@ -444,12 +444,18 @@ impl Mesh {
             elems[p as usize].v[i]
         };
         let mut twins: Vec<Vec<[VertId; 2]>> = vec![Vec::new(); raw.len() * 4];
+        let mut twin_edges: Vec<Vec<u32>> = vec![Vec::new(); raw.len() * 4];
         for g in &groups {
             for i in 0..g.len() {
                 let (pi, ki) = (g[i].2, g[i].3 as usize);
                 if patches[pi as usize].adj[ki] != NONE {
                     continue;
                 }
+                twin_edges[pi as usize * 4 + ki].extend(
+                    g.iter()
+                        .filter(|gj| gj.2 != pi)
+                        .map(|gj| gj.2 * 4 + gj.3 as u32),
+                );
                 let ri = &raw[pi as usize];
                 let (c0, c1) = (ri.cls[ki], ri.cls[(ki + 1) % ri.n]);
                 let own = [copy_at(pi, c0), copy_at(pi, c1)];
@@ -474,6 +480,15 @@ impl Mesh {
             twin_verts.extend(t);
             twin_start.push(twin_verts.len() as u32);
         }
+        let mut twin_edge_start = Vec::with_capacity(twin_edges.len() + 1);
+        let mut twin_edge = Vec::new();
+        twin_edge_start.push(0u32);
+        for mut t in twin_edges {
+            t.sort_unstable();
+            t.dedup();
+            twin_edge.extend(t);
+            twin_edge_start.push(twin_edge.len() as u32);
+        }
 
         Ok(Mesh {
             pos,
@@ -486,6 +501,8 @@ impl Mesh {
             patches,
             twin_start,
             twin_verts,
+            twin_edge_start,
+            twin_edge,
             surfaces,
             eps,
             degenerate,

@@ -292,6 +292,11 @@ pub struct Mesh {
     /// another surface's copies of its start and end corners.
     pub(crate) twin_start: Vec<u32>,
     pub(crate) twin_verts: Vec<[VertId; 2]>,
+    /// Patch edge `p * 4 + j` (on its surface's boundary) is also edge `e & 3`
+    /// of patch `e >> 2` for each `e` in
+    /// `twin_edge[twin_edge_start[i]..twin_edge_start[i + 1]]`.
+    pub(crate) twin_edge_start: Vec<u32>,
+    pub(crate) twin_edge: Vec<u32>,
     pub(crate) surfaces: Vec<Surface>,
     /// The epsilon the mesh was built with.
     pub(crate) eps: f64,
@@ -599,30 +604,61 @@ impl Mesh {
         let el = &self.elems[e as usize];
         let n = el.n();
         let pos = |v: VertId| self.pos[v.idx()];
-        (0..n).all(|k| match self.across(e, k) {
-            Some((q, j)) => {
-                let qe = &self.elems[q as usize];
-                if !qe.is_leaf() {
-                    return true;
+        let mut along = Vec::new();
+        (0..n).all(|k| {
+            let (a, b) = (pos(el.v[k]), pos(el.v[(k + 1) % n]));
+            let half = 0.5 * a.distance(b);
+            match self.across(e, k) {
+                Some((q, j)) => {
+                    let qe = &self.elems[q as usize];
+                    if !qe.is_leaf() {
+                        return true;
+                    }
+                    self.fan_wide_enough(q, j, half, floor)
+                        && (qe.level >= el.level || self.splittable(q))
                 }
-                // The neighbour gets a vertex on its edge j, half our edge
-                // from its ends: the triangles its output fans to that vertex
-                // are at least (half edge × apex height / longest edge) wide.
-                let half = 0.5 * pos(el.v[k]).distance(pos(el.v[(k + 1) % n]));
-                let m = qe.n();
-                let (a, b) = (pos(qe.v[j]), pos(qe.v[(j + 1) % m]));
-                let d = (b - a).normalize_or_zero();
-                let apex = (2..m)
-                    .map(|i| d.cross(pos(qe.v[(j + i) % m]) - a).length())
-                    .fold(f64::INFINITY, f64::min);
-                let longest = self.elem_longest_edge(ElemId(q));
-                if half * apex < 0.25 * floor * longest {
-                    return false;
+                None => {
+                    // On the surface's boundary: the midpoint is stitched
+                    // into the other surfaces' patches on this edge.
+                    let j = el.pedge(k);
+                    if j == INTERIOR {
+                        return true;
+                    }
+                    let t = el.patch as usize * 4 + j as usize;
+                    let m = (a + b) * 0.5;
+                    let (lo, hi) = (self.twin_edge_start[t], self.twin_edge_start[t + 1]);
+                    (lo..hi).all(|i| {
+                        let pe = self.twin_edge[i as usize];
+                        let (pt, kt) = (pe >> 2, (pe & 3) as usize);
+                        along.clear();
+                        self.leaves_along(pt, kt, &mut along);
+                        along.iter().all(|&q| {
+                            let qe = &self.elems[q.idx()];
+                            let (qa, qb) = (pos(qe.v[kt]), pos(qe.v[(kt + 1) % qe.n()]));
+                            let d = qb - qa;
+                            let s = (m - qa).dot(d) / d.length_squared().max(f64::MIN_POSITIVE);
+                            !(0.0..=1.0).contains(&s) || self.fan_wide_enough(q.0, kt, half, floor)
+                        })
+                    })
                 }
-                qe.level >= el.level || self.splittable(q)
             }
-            None => true,
         })
+    }
+
+    /// Whether leaf `q`, given a vertex on its edge `j` at `half` from the
+    /// nearest vertex there, still fans into output triangles at least
+    /// `floor / 4` wide: half × its apex's height over edge `j` ÷ its
+    /// longest edge bounds their width from below.
+    fn fan_wide_enough(&self, q: u32, j: usize, half: f64, floor: f64) -> bool {
+        let qe = &self.elems[q as usize];
+        let m = qe.n();
+        let pos = |v: VertId| self.pos[v.idx()];
+        let (a, b) = (pos(qe.v[j]), pos(qe.v[(j + 1) % m]));
+        let d = (b - a).normalize_or_zero();
+        let apex = (2..m)
+            .map(|i| d.cross(pos(qe.v[(j + i) % m]) - a).length())
+            .fold(f64::INFINITY, f64::min);
+        half * apex >= 0.25 * floor * self.elem_longest_edge(ElemId(q))
     }
 
     /// Mean of the element's corners.
@@ -674,6 +710,8 @@ impl Mesh {
             + self.patches.capacity() * size_of::<Patch>()
             + self.twin_start.capacity() * 4
             + self.twin_verts.capacity() * 8
+            + self.twin_edge_start.capacity() * 4
+            + self.twin_edge.capacity() * 4
             + self
                 .surfaces
                 .iter()

@@ -853,3 +853,33 @@ fn a_sliver_beside_a_refined_element_is_not_split_below_epsilon() {
         ugcheck_clean(&src, &m);
     }
 }
+
+#[test]
+fn a_sliver_across_a_surface_boundary_limits_the_split_beside_it() {
+    // A floor and, standing on its edge a–b, a wall that is a sliver 40
+    // epsilons high: the floor's midpoints on a–b are stitched into the
+    // sliver, whose output fans to them must stay wider than epsilon.
+    let src = format!(
+        "c_rgb grey 0.5 0.5 0.5;
+         v a 0 0 0; v b 1 0 0; v c 1 1 0; v d 0 1 0; v e 0.5 0 {};
+         f floor (a b c d) grey; f wall (a e b) grey;",
+        40.0 * EPS
+    );
+    let (src, mut m) = mesh(&src);
+    assert_eq!(m.num_surfaces(), 2);
+    let near = DVec3::new(0.3, 0.001, 0.0);
+    let mut levels = Vec::new();
+    for _ in 0..20 {
+        let e = leaf_at(&m, PatchId(0), near);
+        levels.push(m.elem_level(e));
+        m.split(e);
+    }
+    m.validate().unwrap();
+    // Half an edge × 40 ε ≥ 4 ε × 1 (the sliver's longest edge): the
+    // floor's pieces of a–b stay at least 0.1 long (level 3: 0.125).
+    assert_eq!(*levels.last().unwrap(), 3, "{levels:?}");
+    assert!(!m.can_split(leaf_at(&m, PatchId(0), near)));
+    // Away from the sliver the floor still splits.
+    assert!(m.can_split(leaf_at(&m, PatchId(0), DVec3::new(0.3, 0.9, 0.0))));
+    ugcheck_clean(&src, &m);
+}

@@ -138,9 +138,10 @@ pub struct Options {
     /// (`Some(0)`: try every patch; `None`: every patch while corners ×
     /// patches ≤ 4·10⁶, else 512).
     pub tail_rays: Option<usize>,
-    /// After the tail, split where its reflected light is steep and gather
-    /// it exactly at the new vertices, at most this many times the patch
-    /// corners' gather (the steepest first; 0: never).
+    /// After the tail, check split vertices against exact gathers
+    /// ([`Solver::check_tail_interpolation`]), then split where its
+    /// reflected light is steep and gather it exactly at the new vertices:
+    /// each at most this many times the patch corners' gather (0: never).
     pub tail_refine: f64,
     /// Give a vertex made by refinement its exact irradiance from every
     /// earlier shot (re-shooting them at it) instead of the mean of its
@@ -839,7 +840,9 @@ impl<'v> Solver<'v> {
             self.h[v] = add(self.h[v], t);
         }
         let t_check = Instant::now();
-        let checked = self.check_tail_interpolation(&tr, &shot_b, &mut t_all, &centre_of, &cancel);
+        let check_budget = (self.opts.tail_refine * recv.len() as f64).ceil() as usize;
+        let checked =
+            self.check_tail_interpolation(&tr, &shot_b, &mut t_all, &centre_of, check_budget, &cancel);
         let check_seconds = t_check.elapsed().as_secs_f64();
         // §6 for the tail's light: split where the radiosity is not linear
         // across an element, each new vertex gathering the tail exactly.
@@ -888,14 +891,17 @@ impl<'v> Solver<'v> {
     /// the patches' first split down: the vertices of the first level, and
     /// of each deeper level those with a parent whose exact gather differed
     /// from its mean by more than [`TAIL_CHECK`] of its irradiance, gather
-    /// the tail exactly; the vertices below take the new means. Returns the
-    /// vertices gathered.
+    /// the tail exactly; the vertices below take the new means. At most
+    /// `budget` vertices gather (where a level would pass it, those where
+    /// the tail is the largest share of the light). Returns the vertices
+    /// gathered.
     fn check_tail_interpolation(
         &mut self,
         tr: &crate::tail::Transport,
         shot_b: &[Rgb],
         t_all: &mut [Rgb],
         centre_of: &rustc_hash::FxHashMap<u32, u32>,
+        budget: usize,
         cancel: &(dyn Fn() -> bool + Sync),
     ) -> usize {
         let nv = self.mesh.num_vertices();
@@ -927,7 +933,7 @@ impl<'v> Solver<'v> {
             if cancel() {
                 break;
             }
-            let ids: Vec<VertId> = (0..nv)
+            let mut ids: Vec<VertId> = (0..nv)
                 .filter(|&v| {
                     depth[v] == d
                         && patch_of[v] != u32::MAX
@@ -935,8 +941,20 @@ impl<'v> Solver<'v> {
                 })
                 .map(|v| VertId(v as u32))
                 .collect();
-            if ids.is_empty() {
+            if ids.is_empty() || gathered >= budget {
                 break;
+            }
+            if ids.len() > budget - gathered {
+                // Over the budget: the vertices where the tail is the
+                // largest share of the light first (in shadow, where its
+                // error shows).
+                let share = |v: VertId| {
+                    let (t, h) = (sum(t_all[v.idx()]), sum(self.h[v.idx()]));
+                    if h > 0.0 { t / h } else { 0.0 }
+                };
+                ids.sort_by(|&x, &y| share(y).total_cmp(&share(x)).then(x.cmp(&y)));
+                ids.truncate(budget - gathered);
+                ids.sort_unstable();
             }
             let dirs = self.inward(&ids);
             let mesh = &self.mesh;
