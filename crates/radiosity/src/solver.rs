@@ -841,8 +841,14 @@ impl<'v> Solver<'v> {
         }
         let t_check = Instant::now();
         let check_budget = (self.opts.tail_refine * recv.len() as f64).ceil() as usize;
-        let checked =
-            self.check_tail_interpolation(&tr, &shot_b, &mut t_all, &centre_of, check_budget, &cancel);
+        let checked = self.check_tail_interpolation(
+            &tr,
+            &shot_b,
+            &mut t_all,
+            &centre_of,
+            check_budget,
+            &cancel,
+        );
         let check_seconds = t_check.elapsed().as_secs_f64();
         // §6 for the tail's light: split where the radiosity is not linear
         // across an element, each new vertex gathering the tail exactly.
@@ -919,7 +925,8 @@ impl<'v> Solver<'v> {
             }
         }
         for v in 0..nv {
-            if let libmesh::VertexOrigin::Split([a, b]) = self.mesh.vertex_origin(VertId(v as u32)) {
+            if let libmesh::VertexOrigin::Split([a, b]) = self.mesh.vertex_origin(VertId(v as u32))
+            {
                 depth[v] = depth[a.idx()].max(depth[b.idx()]).saturating_add(1);
                 if patch_of[v] == u32::MAX {
                     patch_of[v] = patch_of[a.idx()].min(patch_of[b.idx()]);
@@ -970,7 +977,11 @@ impl<'v> Solver<'v> {
             for (&v, t) in ids.iter().zip(got) {
                 let i = v.idx();
                 let (h, old) = (self.h[i], t_all[i]);
-                let h = [h[0] - old[0] + t[0], h[1] - old[1] + t[1], h[2] - old[2] + t[2]];
+                let h = [
+                    h[0] - old[0] + t[0],
+                    h[1] - old[1] + t[1],
+                    h[2] - old[2] + t[2],
+                ];
                 let diff: f64 = (0..3).map(|k| (t[k] - old[k]).abs()).sum();
                 flagged[i] = diff > TAIL_CHECK * sum(h).max(f64::MIN_POSITIVE);
                 exact[i] = true;
@@ -985,7 +996,11 @@ impl<'v> Solver<'v> {
                 if let Some((a, b)) = parents(v) {
                     let t = scale(add(t_all[a], t_all[b]), 0.5);
                     let (h, old) = (self.h[v], t_all[v]);
-                    self.h[v] = [h[0] - old[0] + t[0], h[1] - old[1] + t[1], h[2] - old[2] + t[2]];
+                    self.h[v] = [
+                        h[0] - old[0] + t[0],
+                        h[1] - old[1] + t[1],
+                        h[2] - old[2] + t[2],
+                    ];
                     t_all[v] = t;
                 }
             }
