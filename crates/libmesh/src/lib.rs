@@ -217,7 +217,9 @@ pub const MAX_LEVEL: u32 = 30;
 
 /// A split's children are at least this many build epsilons across: an
 /// element whose shortest edge or width is below twice this is not split,
-/// nor is one whose split would need such an element split first (balance).
+/// nor is one whose split would need such an element split first (balance)
+/// or would fan a neighbour into triangles narrower than a quarter of it
+/// ([`Mesh::can_split`]).
 /// Without it a sliver beside a refined element is halved until its edges
 /// are below epsilon (zero-length edges in the output).
 pub const MIN_CHILD_EPS: f64 = 16.0;
@@ -587,8 +589,11 @@ impl Mesh {
     }
 
     /// Whether [`Mesh::split`] would split leaf `e`: it is a leaf below
-    /// [`MAX_LEVEL`], and neither it nor any element balance would split
-    /// first is narrower than `2 ×` [`MIN_CHILD_EPS`] build epsilons.
+    /// [`MAX_LEVEL`], neither it nor any element balance would split first
+    /// is narrower than `2 ×` [`MIN_CHILD_EPS`] build epsilons, and no
+    /// midpoint it makes would fan a neighbouring leaf (in its surface, or
+    /// across a surface boundary) into output triangles narrower than a
+    /// quarter of that.
     pub fn can_split(&self, e: ElemId) -> bool {
         match self.elems.get(e.idx()) {
             Some(el) if el.is_leaf() && (el.level as u32) < MAX_LEVEL => self.splittable(e.0),

@@ -813,6 +813,18 @@ fn a_partition_foot_gets_a_vertex_copy_per_side() {
     assert!(split.num_vertices() > m.num_vertices());
 }
 
+/// Splits, `times` times, the leaf of patch `p` containing `x`: the levels
+/// of the leaves split (or left, when refused).
+fn split_towards(m: &mut Mesh, p: PatchId, x: DVec3, times: usize) -> Vec<u32> {
+    (0..times)
+        .map(|_| {
+            let e = leaf_at(m, p, x);
+            m.split(e);
+            m.elem_level(e)
+        })
+        .collect()
+}
+
 #[test]
 fn a_sliver_beside_a_refined_element_is_not_split_below_epsilon() {
     // A unit square and, on its edge x = 1, a sliver triangle: 40 epsilons
@@ -833,12 +845,7 @@ fn a_sliver_beside_a_refined_element_is_not_split_below_epsilon() {
         assert_eq!(m.num_surfaces(), 1);
         // Refine the square towards the sliver as far as it will go.
         let near = DVec3::new(0.999, 0.3, 0.0);
-        let mut levels = Vec::new();
-        for _ in 0..20 {
-            let e = leaf_at(&m, PatchId(0), near);
-            levels.push(m.elem_level(e));
-            m.split(e);
-        }
+        let levels = split_towards(&mut m, PatchId(0), near, 20);
         m.validate().unwrap();
         assert!(m.unbalanced_pairs(PatchId(0)).is_empty());
         assert!(m.unbalanced_pairs(PatchId(1)).is_empty());
@@ -880,12 +887,7 @@ fn a_sliver_across_a_surface_boundary_limits_the_split_beside_it() {
     let (src, mut m) = mesh(&src);
     assert_eq!(m.num_surfaces(), 2);
     let near = DVec3::new(0.3, 0.001, 0.0);
-    let mut levels = Vec::new();
-    for _ in 0..20 {
-        let e = leaf_at(&m, PatchId(0), near);
-        levels.push(m.elem_level(e));
-        m.split(e);
-    }
+    let levels = split_towards(&mut m, PatchId(0), near, 20);
     m.validate().unwrap();
     // Half an edge × 40 ε ≥ 4 ε × 1 (the sliver's longest edge): the
     // floor's pieces of a–b stay at least 0.1 long (level 3: 0.125).

@@ -66,6 +66,16 @@ fn steep(a: Rgb, b: Rgb, grad: f64, rel: f64) -> bool {
     steepness(a, b, grad, rel) > 1.0
 }
 
+/// Replaces vertex `v`'s share of the tail's irradiance (`t_all[v]`, also
+/// counted in its total `h[v]`) by `t`.
+fn set_tail(h: &mut [Rgb], t_all: &mut [Rgb], v: usize, t: Rgb) {
+    let old = t_all[v];
+    for k in 0..3 {
+        h[v][k] = h[v][k] - old[k] + t[k];
+    }
+    t_all[v] = t;
+}
+
 fn sum(a: Rgb) -> f64 {
     a[0] + a[1] + a[2]
 }
@@ -917,39 +927,59 @@ impl<'v> Solver<'v> {
             }
             _ => None,
         };
-        let mut depth = vec![0u8; nv];
         let mut patch_of = vec![u32::MAX; nv];
         for e in self.mesh.leaves() {
             for &v in self.mesh.elem_corners(e) {
                 patch_of[v.idx()] = self.mesh.elem_patch(e).0;
             }
         }
+        // The split vertices by depth (a midpoint is one deeper than its
+        // deeper parent), each level in id order.
+        let mut depth = vec![0u8; nv];
+        let mut levels: Vec<Vec<u32>> = Vec::new();
         for v in 0..nv {
             if let libmesh::VertexOrigin::Split([a, b]) = self.mesh.vertex_origin(VertId(v as u32))
             {
-                depth[v] = depth[a.idx()].max(depth[b.idx()]).saturating_add(1);
+                let d = depth[a.idx()].max(depth[b.idx()]).saturating_add(1);
+                depth[v] = d;
                 if patch_of[v] == u32::MAX {
                     patch_of[v] = patch_of[a.idx()].min(patch_of[b.idx()]);
                 }
+                if levels.len() < d as usize {
+                    levels.resize_with(d as usize, Vec::new);
+                }
+                levels[d as usize - 1].push(v as u32);
             }
         }
         let mut flagged = vec![false; nv];
-        let mut exact = vec![false; nv];
         let mut gathered = 0;
-        for d in 1..=u8::MAX {
-            if cancel() {
-                break;
+        let mut checking = true;
+        for (k, level) in levels.iter().enumerate() {
+            // Every vertex of this level takes its parents' mean (they are
+            // final: shallower, and checked or not already).
+            for &v in level {
+                if let Some((a, b)) = parents(v as usize) {
+                    let t = scale(add(t_all[a], t_all[b]), 0.5);
+                    set_tail(&mut self.h, t_all, v as usize, t);
+                }
             }
-            let mut ids: Vec<VertId> = (0..nv)
-                .filter(|&v| {
-                    depth[v] == d
-                        && patch_of[v] != u32::MAX
-                        && parents(v).is_some_and(|(a, b)| d == 1 || flagged[a] || flagged[b])
+            checking = checking && !cancel() && gathered < budget;
+            if !checking {
+                continue;
+            }
+            let mut ids: Vec<VertId> = level
+                .iter()
+                .filter(|&&v| {
+                    patch_of[v as usize] != u32::MAX
+                        && parents(v as usize)
+                            .is_some_and(|(a, b)| k == 0 || flagged[a] || flagged[b])
                 })
-                .map(|v| VertId(v as u32))
+                .map(|&v| VertId(v))
                 .collect();
-            if ids.is_empty() || gathered >= budget {
-                break;
+            if ids.is_empty() {
+                // Nothing flagged here, so nothing deeper is either.
+                checking = false;
+                continue;
             }
             if ids.len() > budget - gathered {
                 // Over the budget: the vertices where the tail is the
@@ -976,33 +1006,10 @@ impl<'v> Solver<'v> {
             gathered += ids.len();
             for (&v, t) in ids.iter().zip(got) {
                 let i = v.idx();
-                let (h, old) = (self.h[i], t_all[i]);
-                let h = [
-                    h[0] - old[0] + t[0],
-                    h[1] - old[1] + t[1],
-                    h[2] - old[2] + t[2],
-                ];
+                let old = t_all[i];
+                set_tail(&mut self.h, t_all, i, t);
                 let diff: f64 = (0..3).map(|k| (t[k] - old[k]).abs()).sum();
-                flagged[i] = diff > TAIL_CHECK * sum(h).max(f64::MIN_POSITIVE);
-                exact[i] = true;
-                self.h[i] = h;
-                t_all[i] = t;
-            }
-            // The vertices below take their parents' new mean.
-            for v in 0..nv {
-                if depth[v] <= d || exact[v] {
-                    continue;
-                }
-                if let Some((a, b)) = parents(v) {
-                    let t = scale(add(t_all[a], t_all[b]), 0.5);
-                    let (h, old) = (self.h[v], t_all[v]);
-                    self.h[v] = [
-                        h[0] - old[0] + t[0],
-                        h[1] - old[1] + t[1],
-                        h[2] - old[2] + t[2],
-                    ];
-                    t_all[v] = t;
-                }
+                flagged[i] = diff > TAIL_CHECK * sum(self.h[i]).max(f64::MIN_POSITIVE);
             }
         }
         gathered
@@ -1098,14 +1105,7 @@ impl<'v> Solver<'v> {
                 .collect();
             gathered += fresh.len();
             for (&(v, _), t) in fresh.iter().zip(got) {
-                let i = v.idx();
-                let (h, old) = (self.h[i], t_all[i]);
-                self.h[i] = [
-                    h[0] - old[0] + t[0],
-                    h[1] - old[1] + t[1],
-                    h[2] - old[2] + t[2],
-                ];
-                t_all[i] = t;
+                set_tail(&mut self.h, t_all, v.idx(), t);
             }
         }
         (split_count, gathered)
