@@ -38,7 +38,9 @@ enum Format {
 /// names and E, ρ those of the face the point lies on (within --tolerance,
 /// facing that side). H is estimated from paths that sample the emitters at
 /// every bounce (next-event estimation), continue in cosine-distributed
-/// directions and end by Russian roulette; nothing of ugrad's meshing, form
+/// directions (emitters they meet weighed against the emitter samples by
+/// multiple importance sampling) and end by Russian roulette; nothing of
+/// ugrad's meshing, form
 /// factors or visibility is used. Every point has its own random stream
 /// (from --seed and its position in the list): the output is the same at
 /// any thread count.

@@ -168,6 +168,9 @@ impl Light {
 pub(crate) struct LightTree {
     /// The root first; empty without emitters.
     nodes: Vec<LightNode>,
+    /// Each node's parent (`u32::MAX` at the root) and each light's leaf.
+    parent: Vec<u32>,
+    leaf_of: Vec<u32>,
 }
 
 impl LightTree {
@@ -179,7 +182,22 @@ impl LightTree {
         if !order.is_empty() {
             Self::build(lights, &mut order, &mut nodes);
         }
-        LightTree { nodes }
+        let mut parent = vec![u32::MAX; nodes.len()];
+        let mut leaf_of = vec![u32::MAX; lights.len()];
+        for (i, node) in nodes.iter().enumerate() {
+            match node.kind {
+                NodeKind::Leaf(k) => leaf_of[k as usize] = i as u32,
+                NodeKind::Inner(a, b) => {
+                    parent[a as usize] = i as u32;
+                    parent[b as usize] = i as u32;
+                }
+            }
+        }
+        LightTree {
+            nodes,
+            parent,
+            leaf_of,
+        }
     }
 
     /// The importance of node `i` at `o` (front normal `n`).
@@ -225,6 +243,36 @@ impl LightTree {
                 }
             }
         }
+    }
+
+    /// The probability that [`LightTree::pick`] at `o` (front normal `n`)
+    /// returns light `k`: the product, from the root down to `k`'s leaf,
+    /// of the share of each node's importance that the branch towards `k`
+    /// holds. O(depth); what a BSDF-sampled path that hits emitter `k`
+    /// needs for its multiple-importance weight.
+    pub(crate) fn probability(&self, lights: &[Light], k: usize, o: DVec3, n: DVec3) -> f64 {
+        let Some(&leaf) = self.leaf_of.get(k) else {
+            return 0.0;
+        };
+        let mut p = 1.0;
+        let mut c = leaf as usize;
+        while let Some(&up) = self.parent.get(c) {
+            if up == u32::MAX {
+                break;
+            }
+            let NodeKind::Inner(a, b) = self.nodes[up as usize].kind else {
+                return 0.0;
+            };
+            let ia = self.importance(lights, a as usize, o, n);
+            let ib = self.importance(lights, b as usize, o, n);
+            let t = ia + ib;
+            if !(t > 0.0 && t.is_finite()) {
+                return 0.0;
+            }
+            p *= if c == a as usize { ia } else { ib } / t;
+            c = up as usize;
+        }
+        p
     }
 
     /// Builds the subtree over `order` into `nodes`; returns its root.

@@ -89,8 +89,13 @@ fn closed_furnace_gives_e_over_one_minus_rho() {
         "defmat glow; diffuse_rgb 0.5 0.5 0.5; emission_rgb 1 2 0.5; end;\n",
     ));
     let want = [2.0, 4.0, 1.0];
+    // Paths that sample the emitters and those that hit them are weighed
+    // by multiple importance (ugprobe's README): points next to an edge
+    // (the last one, 0.05 from two faces) no longer have the heavy tail
+    // of the light sample's 1/r² (a point 1e-5 from a glowing ceiling read
+    // 2.68 ± 1.0 at 20,000 paths; now 1.993 ± 0.003).
     let opts = Options {
-        samples: 16384,
+        samples: 32768,
         ..Options::default()
     };
     for (k, (p, n)) in [
@@ -98,12 +103,13 @@ fn closed_furnace_gives_e_over_one_minus_rho() {
         (DVec3::new(0.3, 0.8, 1.0), -DVec3::Z),
         (DVec3::new(1.0, 0.1, 0.9), -DVec3::X),
         (DVec3::new(0.95, 0.0, 0.05), DVec3::Y),
+        (DVec3::new(0.5, 0.99999, 0.0), DVec3::Z),
     ]
     .into_iter()
     .enumerate()
     {
         let e = estimate_at(&s, p, n, &opts, k as u64);
-        assert_within_3_se(&format!("furnace at {p}"), &e, want, 0.03);
+        assert_within_3_se(&format!("furnace at {p}"), &e, want, 0.005);
     }
 }
 
