@@ -299,11 +299,13 @@ pub struct Solver<'v> {
     history: Vec<Past>,
     /// Per leaf (by element id), how much its mean irradiance exceeds the
     /// mean of its corners' (see [`Solver::quadrature`]): from the shots
-    /// that new vertices re-gather exactly, and from those they take as
-    /// their parents' mean (see [`Solver::split_leaf`]); only leaves that
-    /// have one.
-    qcorr: rustc_hash::FxHashMap<u32, [[f32; 3]; 2]>,
-    /// Per patch, Σ over its leaves of area × ρ × `qcorr`: what
+    /// that new vertices re-gather exactly (dense: in a lit scene most
+    /// leaves have some; empty until the first), and from those they take
+    /// as their parents' mean (see [`Solver::split_leaf`]; sparse: only
+    /// shots beyond the history, or no re-gathering).
+    qexact: Vec<[f32; 3]>,
+    qmean: rustc_hash::FxHashMap<u32, [f32; 3]>,
+    /// Per patch, Σ over its leaves of area × ρ × the two: what
     /// [`Solver::patch_energy`] adds to the corners' trapezoid rule.
     pcorr: Vec<Rgb>,
 }
@@ -388,7 +390,8 @@ impl<'v> Solver<'v> {
             shots: Vec::new(),
             tail: None,
             history: Vec::new(),
-            qcorr: Default::default(),
+            qexact: Vec::new(),
+            qmean: Default::default(),
             pcorr: vec![[0.0; 3]; np],
         }
     }
@@ -1124,26 +1127,38 @@ impl<'v> Solver<'v> {
     /// parent's linear interpolation.
     fn split_leaf(&mut self, e: ElemId) -> libmesh::Split {
         let split = self.mesh.split(e);
-        if self.qcorr.is_empty() {
+        if self.qexact.is_empty() && self.qmean.is_empty() {
             return split;
         }
         let keep: f32 = if self.regathers() { 0.25 } else { 1.0 };
+        if !self.qexact.is_empty() {
+            self.qexact.resize(self.mesh.num_elements(), [0.0; 3]);
+        }
         for &r in &split.refined {
-            let Some(d) = self.qcorr.remove(&r.0) else {
-                continue;
-            };
             let Some(children) = self.mesh.elem_children(r) else {
                 continue;
             };
-            let dc = [d[0].map(|x| x * keep), d[1]];
+            if let Some(d) = self.qmean.remove(&r.0) {
+                for c in children {
+                    self.qmean.insert(c.0, d);
+                }
+            }
+            let Some(&d) = self.qexact.get(r.idx()) else {
+                continue;
+            };
+            if d == [0.0; 3] {
+                continue;
+            }
+            self.qexact[r.idx()] = [0.0; 3];
+            let dc = d.map(|x| x * keep);
             for c in children {
-                self.qcorr.insert(c.0, dc);
+                self.qexact[c.idx()] = dc;
             }
             let p = self.mesh.elem_patch(r).idx();
             let rho = self.rho[self.mesh.elem_surface(r).idx()];
             let a = self.mesh.elem_area(r);
             for k in 0..3 {
-                self.pcorr[p][k] -= a * rho[k] * f64::from(d[0][k] - dc[0][k]);
+                self.pcorr[p][k] -= a * rho[k] * f64::from(d[k] - dc[k]);
             }
         }
         split
@@ -1163,8 +1178,8 @@ impl<'v> Solver<'v> {
     /// The centre's form factor is unoccluded (no rays), scaled by how much
     /// of the corners' unoccluded light arrived: the correction of a leaf
     /// is mean(F) · w · (F_u(centre) / mean(F_u) − 1), F the corners' form
-    /// factors as shot, F_u without occlusion. Kept per leaf (`qcorr`, in
-    /// its first part when `exact`: new vertices will re-gather this shot)
+    /// factors as shot, F_u without occlusion. Kept per leaf (`qexact` when
+    /// `exact`: new vertices will re-gather this shot, else `qmean`)
     /// and per patch (`pcorr`); returns what it added to the shot's
     /// received and reflected energy. It costs a form factor per vertex and
     /// per leaf reached, no rays.
@@ -1241,7 +1256,14 @@ impl<'v> Solver<'v> {
             let a = self.mesh.elem_area(e);
             let rho = self.rho[self.mesh.elem_surface(e).idx()];
             let p = self.mesh.elem_patch(e).idx();
-            let q = &mut self.qcorr.entry(e.0).or_insert([[0.0; 3]; 2])[usize::from(!exact)];
+            let q = if exact {
+                if self.qexact.len() < self.mesh.num_elements() {
+                    self.qexact.resize(self.mesh.num_elements(), [0.0; 3]);
+                }
+                &mut self.qexact[e.idx()]
+            } else {
+                self.qmean.entry(e.0).or_insert([0.0; 3])
+            };
             for k in 0..3 {
                 q[k] += dh[k] as f32;
                 self.pcorr[p][k] += a * rho[k] * dh[k];
