@@ -443,9 +443,12 @@ fn cornell_box_through_the_chain_is_within_two_percent_rms_of_ugprobe() {
     assert_eq!(n, 19, "{out}");
     // rms² ≈ true rms² + se²: the estimate's own noise is about 0.8%.
     assert!(se < 1.0, "{out}");
-    assert!(rms < 2.0, "rms {rms}%\n{out}");
-    // The tail's light at split vertices is checked against exact gathers
-    // (1.26% rms, 2.64% max measured; before, the mean of the parents left
-    // the floor beside the short block 4.6% dark).
-    assert!(max < 3.5, "max {max}%\n{out}");
+    // Measured 0.88% rms, 1.93% max (0.62% / 1.29% at 65,536 paths, se
+    // 0.57%), since patch energy samples element centres and the tail
+    // finds the small surfaces next to those its rays hit; 1.26% / 2.64%
+    // before (a dark bias of 0.3%), and before the tail's light at split
+    // vertices was checked against exact gathers the floor beside the
+    // short block was 4.6% dark.
+    assert!(rms < 1.25, "rms {rms}%\n{out}");
+    assert!(max < 2.5, "max {max}%\n{out}");
 }
