@@ -208,8 +208,9 @@ pub struct ShotStats {
     /// Energy received by the scene's elements from this shot (sum of channels;
     /// equals `energy` in a closed enclosure up to discretisation).
     pub received: f64,
-    /// The part of `received` the surfaces reflect (Σ area × ρ × mean corner ΔH):
-    /// what this shot added to the patches' energy.
+    /// The part of `received` the surfaces reflect (Σ area × ρ × mean ΔH,
+    /// the mean with its centre sample, see `Solver::quadrature`): what
+    /// this shot added to the patches' energy.
     pub reflected: f64,
     /// Shooting elements after light subdivision.
     pub shooters: usize,
@@ -428,8 +429,8 @@ impl<'v> Solver<'v> {
     }
 
     /// Energy of a patch (§5.1): Σ over its elements of area × mean corner
-    /// radiosity, and the correction of that trapezoid rule for the
-    /// emitters' peaked light ([`Solver::quadrature`]).
+    /// radiosity, and the correction of that trapezoid rule for peaked
+    /// light ([`Solver::quadrature`]).
     pub fn patch_energy(&self, p: PatchId) -> Rgb {
         let mut acc = self.pcorr[p.idx()];
         for e in self.mesh.patch_leaves(p) {
@@ -1116,6 +1117,19 @@ impl<'v> Solver<'v> {
         (split_count, gathered)
     }
 
+    /// The §5.4 offset of each shooter piece: `offset` times its longest edge.
+    fn offsets(&self, shooters: &[(Vec<DVec3>, DVec3)]) -> Vec<f64> {
+        shooters
+            .iter()
+            .map(|(poly, _)| {
+                let size = (0..poly.len())
+                    .map(|i| (poly[(i + 1) % poly.len()] - poly[i]).length())
+                    .fold(0.0, f64::max);
+                self.opts.offset * size
+            })
+            .collect()
+    }
+
     /// Splits leaf `e` (and what balance forces), handing each split
     /// leaf's quadrature correction to its children. The part from shots
     /// whose light the new vertices take exactly (re-gathered from the
@@ -1191,15 +1205,7 @@ impl<'v> Solver<'v> {
     ) -> (f64, f64) {
         let mesh = &self.mesh;
         let gain = &self.gain;
-        let deltas: Vec<f64> = shooters
-            .iter()
-            .map(|(poly, _)| {
-                let size = (0..poly.len())
-                    .map(|i| (poly[(i + 1) % poly.len()] - poly[i]).length())
-                    .fold(0.0, f64::max);
-                self.opts.offset * size
-            })
-            .collect();
+        let deltas = self.offsets(shooters);
         // The unoccluded form factor at a point; `None` on (or just behind)
         // a piece's plane, where §5.4 moved the receiver.
         let unoccluded = |x: DVec3, n: DVec3| -> Option<f64> {
@@ -1250,6 +1256,9 @@ impl<'v> Solver<'v> {
             (d != 0.0 && d.is_finite()).then_some((e, d))
         });
         let d_b = self.d_b;
+        if exact && !found.is_empty() {
+            self.qexact.resize(self.mesh.num_elements(), [0.0; 3]);
+        }
         let (mut received, mut reflected) = (0.0, 0.0);
         for (e, d) in found {
             let dh = scale(d_b, d);
@@ -1257,9 +1266,6 @@ impl<'v> Solver<'v> {
             let rho = self.rho[self.mesh.elem_surface(e).idx()];
             let p = self.mesh.elem_patch(e).idx();
             let q = if exact {
-                if self.qexact.len() < self.mesh.num_elements() {
-                    self.qexact.resize(self.mesh.num_elements(), [0.0; 3]);
-                }
                 &mut self.qexact[e.idx()]
             } else {
                 self.qmean.entry(e.0).or_insert([0.0; 3])
@@ -1467,15 +1473,7 @@ impl<'v> Solver<'v> {
             Targets::All => nv,
             Targets::List(l) => l.len(),
         };
-        let deltas: Vec<f64> = shooters
-            .iter()
-            .map(|(poly, _)| {
-                let size = (0..poly.len())
-                    .map(|i| (poly[(i + 1) % poly.len()] - poly[i]).length())
-                    .fold(0.0, f64::max);
-                self.opts.offset * size
-            })
-            .collect();
+        let deltas = self.offsets(shooters);
         // Candidates: in front of the shooter's plane and facing it.
         let candidate = |v: VertId, c: DVec3, delta: f64| {
             if mesh.vertex_surface(v) == surface {
