@@ -108,9 +108,10 @@ struct Args {
     /// time to the end.
     #[arg(long, default_value_t = 5e-3, value_name = "FRACTION", value_parser = fraction)]
     tail: f64,
-    /// Rays from each patch corner that find the patches it sees in the
-    /// tail; 0 tries every patch (default: 0 while corners × patches ≤ 4e6,
-    /// else 512).
+    /// Rays from each patch centre that find the patches it sees in the
+    /// tail (corners and split vertices then try what the centres around
+    /// them see); 0 tries every patch everywhere (default: 0 up to 2,048
+    /// patches or where the rays would find most patches anyway, else 512).
     #[arg(long, value_name = "N")]
     tail_rays: Option<usize>,
     /// After the tail, gather it exactly at split vertices where their

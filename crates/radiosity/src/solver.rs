@@ -795,6 +795,7 @@ impl<'v> Solver<'v> {
         let (pairs, bytes) = (tr.pairs(), tr.heap_bytes());
         // The picture: every patch corner gathers once what the patches shot.
         let t2 = Instant::now();
+        tr.compact_rows();
         let Some((recv, total)) = tr.corners(&self.mesh, &shot_b, &cancel) else {
             self.tail = Some(TailStats {
                 after_shots: self.shots.len(),
@@ -810,7 +811,6 @@ impl<'v> Solver<'v> {
             });
             return TailEnd::Stopped(stopped(&interrupt));
         };
-        tr.drop_rows();
         let corner_seconds = t2.elapsed().as_secs_f64();
         // A split quad patch's centre vertex takes the irradiance its patch
         // centre received (a fifth sample: between the corners the field is
@@ -933,12 +933,7 @@ impl<'v> Solver<'v> {
             }
             _ => None,
         };
-        let mut patch_of = vec![u32::MAX; nv];
-        for e in self.mesh.leaves() {
-            for &v in self.mesh.elem_corners(e) {
-                patch_of[v.idx()] = self.mesh.elem_patch(e).0;
-            }
-        }
+        let mut patch_of = self.vertex_patches();
         // The split vertices by depth (a midpoint is one deeper than its
         // deeper parent), each level in id order.
         let mut depth = vec![0u8; nv];
@@ -1006,7 +1001,7 @@ impl<'v> Solver<'v> {
                 .zip(&dirs)
                 .map(|(&v, &inward)| {
                     let size = tr.patch_size(libmesh::PatchId(patch_of[v.idx()]));
-                    tr.at(mesh, v, inward, size, shot_b)
+                    tr.at(mesh, v, inward, size, &[patch_of[v.idx()]], shot_b)
                 })
                 .collect();
             gathered += ids.len();
@@ -1039,6 +1034,9 @@ impl<'v> Solver<'v> {
         let (grad, min_edge) = (self.gradient, self.min_edge);
         let rel = self.opts.gradient_relative;
         let (mut split_count, mut gathered) = (0, 0);
+        // The patch each vertex lies in, on its own surface (the tail's
+        // candidates for a new vertex are its patch's neighbours' rows).
+        let mut patch_of = self.vertex_patches();
         for _round in 0..32 {
             if cancel() || gathered >= budget {
                 break;
@@ -1092,6 +1090,14 @@ impl<'v> Solver<'v> {
                     let tm = scale(add(t_all[a], t_all[b]), 0.5);
                     self.h[nv.v.idx()] = add(scale(add(before(a), before(b)), 0.5), tm);
                     t_all[nv.v.idx()] = tm;
+                    // A stitched copy's parents are its own surface's.
+                    let p = if self.mesh.vertex_surface(nv.v) == self.mesh.elem_surface(e) {
+                        self.mesh.elem_patch(e).0
+                    } else {
+                        patch_of[a]
+                    };
+                    patch_of.resize(self.mesh.num_vertices(), u32::MAX);
+                    patch_of[nv.v.idx()] = p;
                     fresh.push((nv.v, e));
                 }
             }
@@ -1102,11 +1108,13 @@ impl<'v> Solver<'v> {
             ids.sort_unstable();
             let dirs = self.inward(&ids);
             let mesh = &self.mesh;
+            let patch_of = &patch_of;
             let got: Vec<Rgb> = fresh
                 .par_iter()
                 .map(|&(v, e)| {
                     let inward = dirs[ids.binary_search(&v).expect("a fresh vertex")];
-                    tr.at(mesh, v, inward, tr.patch_size(mesh.elem_patch(e)), shot_b)
+                    let size = tr.patch_size(mesh.elem_patch(e));
+                    tr.at(mesh, v, inward, size, &[patch_of[v.idx()]], shot_b)
                 })
                 .collect();
             gathered += fresh.len();
@@ -1115,6 +1123,22 @@ impl<'v> Solver<'v> {
             }
         }
         (split_count, gathered)
+    }
+
+    /// Per vertex, a patch of its own surface that it is a corner of a
+    /// leaf of (`u32::MAX` for none). A vertex stitched onto a neighbour's
+    /// edge is a corner of that surface's elements too; this gives its own.
+    fn vertex_patches(&self) -> Vec<u32> {
+        let mut patch_of = vec![u32::MAX; self.mesh.num_vertices()];
+        for e in self.mesh.leaves() {
+            let s = self.mesh.elem_surface(e);
+            for &v in self.mesh.elem_corners(e) {
+                if self.mesh.vertex_surface(v) == s {
+                    patch_of[v.idx()] = self.mesh.elem_patch(e).0;
+                }
+            }
+        }
+        patch_of
     }
 
     /// The §5.4 offset of each shooter piece: `offset` times its longest edge.
@@ -1782,6 +1806,36 @@ impl<'v> Solver<'v> {
     /// receiver point is not the vertex (on a surface's boundary) are not
     /// culled: that point may lie in a neighbouring patch.
     fn hidden_patches(&self, c: DVec3, shooter: SurfaceId, normal: DVec3) -> Option<Vec<u64>> {
+        // Whether the triangle `t` hides every point of `x` from `c`.
+        let shadows = |c: DVec3, t: [DVec3; 3], x: &[DVec3]| {
+            let tn = (t[1] - t[0]).cross(t[2] - t[0]);
+            let side_c = tn.dot(c - t[0]);
+            if side_c == 0.0 {
+                return false;
+            }
+            let (e1, e2) = (t[1] - t[0], t[2] - t[0]);
+            let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+            let den = d11 * d22 - d12 * d12;
+            if den <= 0.0 {
+                return false;
+            }
+            x.iter().all(|&xi| {
+                let side_x = tn.dot(xi - t[0]);
+                // Strictly on the other side.
+                if side_x * side_c >= 0.0 {
+                    return false;
+                }
+                let tt = side_c / (side_c - side_x);
+                if !(1e-6..=1.0 - 1e-6).contains(&tt) {
+                    return false;
+                }
+                let q = c + (xi - c) * tt - t[0];
+                let (q1, q2) = (q.dot(e1), q.dot(e2));
+                let b1 = (d22 * q1 - d12 * q2) / den;
+                let b2 = (d11 * q2 - d12 * q1) / den;
+                b1 >= 1e-7 && b2 >= 1e-7 && 1.0 - b1 - b2 >= 1e-7
+            })
+        };
         if !self.vis.names_blockers() {
             return None;
         }
@@ -1808,35 +1862,14 @@ impl<'v> Solver<'v> {
                 if n.dot(c - x[0]) <= 0.0 || x.iter().all(|&xi| normal.dot(xi - c) < 0.0) {
                     return false;
                 }
-                let Some(t) = self.vis.blocker(c, x[0], shooter, s) else {
-                    return false;
-                };
-                let tn = (t[1] - t[0]).cross(t[2] - t[0]);
-                let side_c = tn.dot(c - t[0]);
-                if side_c == 0.0 {
-                    return false;
-                }
-                let (e1, e2) = (t[1] - t[0], t[2] - t[0]);
-                let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
-                let den = d11 * d22 - d12 * d12;
-                if den <= 0.0 {
-                    return false;
-                }
-                x.iter().all(|&xi| {
-                    let side_x = tn.dot(xi - t[0]);
-                    // Strictly on the other side.
-                    if side_x * side_c >= 0.0 {
-                        return false;
-                    }
-                    let tt = side_c / (side_c - side_x);
-                    if !(1e-6..=1.0 - 1e-6).contains(&tt) {
-                        return false;
-                    }
-                    let q = c + (xi - c) * tt - t[0];
-                    let (q1, q2) = (q.dot(e1), q.dot(e2));
-                    let b1 = (d22 * q1 - d12 * q2) / den;
-                    let b2 = (d11 * q2 - d12 * q1) / den;
-                    b1 >= 1e-7 && b2 >= 1e-7 && 1.0 - b1 - b2 >= 1e-7
+                // The blocker met toward a corner, else toward the centre
+                // (coincident walls, or a patch straddling two blockers'
+                // shadows: a second chance).
+                let centre = x.iter().copied().sum::<DVec3>() / x.len() as f64;
+                [x[0], centre].iter().any(|&aim| {
+                    self.vis
+                        .blocker(c, aim, shooter, s)
+                        .is_some_and(|t| shadows(c, t, x))
                 })
             })
             .collect();

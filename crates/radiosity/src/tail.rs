@@ -41,7 +41,19 @@
 //!   exactly ([`Transport::at`]) instead of taking the mean of its parents.
 //!   Without it reflected light was resolved at patch size: a furnished
 //!   room's ceiling next to its lamp came out 17% dark at `-l 3%`.
-//! * **Which patches a point sees** is found by casting `rays`
+//! * **Which patches a vertex sees** (a corner, or a split vertex that
+//!   gathers): those seen from the centres of the patches that share a
+//!   corner with its own (on any surface), whose rows are kept, delta-coded,
+//!   once the iteration is over. Nearby centres together see nearly what
+//!   the vertex sees, and many of them miss less than one point's discovery
+//!   rays: on a nine-room building at `-l 2%` the answer was 0.11% below the
+//!   one with every patch tried (rms 0.18% at 370 points), the rays' 0.19%
+//!   (rms 1.8%, −29% at worst), and the corners and split vertices gathered
+//!   in a tenth of the time (the rays were three quarters of the tail's
+//!   time on a 26,000-patch building). A vertex stitched onto another
+//!   surface's edge without a patch of its own surface at hand still casts
+//!   rays.
+//! * **Which patches a patch centre sees** is found by casting `rays`
 //!   cosine-distributed rays from it (stratified, jittered by a hash of the
 //!   receiver: deterministic); for each surface hit, its patches within the
 //!   box of the hit points (grown by a quarter of its diagonal and the
@@ -130,6 +142,16 @@ pub(crate) struct Transport {
     start: Vec<usize>,
     patch: Vec<u32>,
     weight: Vec<f32>,
+    /// Per patch, the patches sharing a corner with it (itself included),
+    /// sorted: `near[near_start[p]..near_start[p + 1]]`.
+    near_start: Vec<u32>,
+    near: Vec<u32>,
+    /// Once the iteration is over ([`Transport::compact_rows`]), row `q`'s
+    /// patches, their differences coded as LEB128 varints:
+    /// `seen[seen_start[q]..seen_start[q + 1]]`. Empty when every patch is
+    /// tried.
+    seen_start: Vec<usize>,
+    seen: Vec<u8>,
 }
 
 impl Transport {
@@ -182,6 +204,7 @@ impl Transport {
             (lo, hi, p as u32)
         }));
         let (touch_start, touch) = touching_surfaces(&shooters, &pts);
+        let (near_start, near) = patches_sharing_a_corner(mesh);
         let mut tr = Transport {
             shooters,
             pts,
@@ -194,6 +217,10 @@ impl Transport {
             start: vec![0],
             patch: Vec::new(),
             weight: Vec::new(),
+            near_start,
+            near,
+            seen_start: Vec::new(),
+            seen: Vec::new(),
         };
         if rays.is_none() && tr.dense() {
             tr.rays = 0;
@@ -206,7 +233,10 @@ impl Transport {
             let q1 = (q0 + CHUNK).min(np);
             let rows: Vec<Vec<(u32, f32)>> = (q0..q1)
                 .into_par_iter()
-                .map(|q| tr.row(&tr.centre_receiver(q)))
+                .map(|q| {
+                    let r = tr.centre_receiver(q);
+                    tr.row(&r, tr.candidates(&r))
+                })
                 .collect();
             for r in rows {
                 for (p, w) in r {
@@ -340,12 +370,56 @@ impl Transport {
         cand
     }
 
-    /// The patches a receiver sees, with F·V of each.
-    fn row(&self, r: &Receiver) -> Vec<(u32, f32)> {
+    /// The candidates of a point of the patches `at` (a patch corner, or a
+    /// split vertex inside or on the edge of a patch): the patches seen from
+    /// the centres of the patches that share a corner with them. A point
+    /// sees, nearly, what the patch centres around it see; this replaces
+    /// its discovery rays (three quarters of the tail's time on a 26k-patch
+    /// building).
+    fn near_candidates(&self, at: &[u32]) -> Vec<u32> {
+        let hint = self.near_patches(at, 1);
+        let mut cand = Vec::new();
+        for q in hint {
+            let q = q as usize;
+            let mut prev = 0u32;
+            let mut bytes = self.seen[self.seen_start[q]..self.seen_start[q + 1]].iter();
+            while let Some(d) = read_varint(&mut bytes) {
+                prev += d;
+                cand.push(prev);
+            }
+        }
+        cand.sort_unstable();
+        cand.dedup();
+        cand
+    }
+
+    /// The patches within `rings` steps of `at` (a step: to a patch that
+    /// shares a corner), sorted. (Two rings instead of one at the vertices:
+    /// 5% slower on a nine-room building at `-l 2%`, and its mean 0.01%
+    /// nearer the answer with every patch tried, −0.11% against −0.12%.)
+    fn near_patches(&self, at: &[u32], rings: usize) -> Vec<u32> {
+        let mut hint = at.to_vec();
+        for _ in 0..rings {
+            hint = hint
+                .iter()
+                .flat_map(|&p| {
+                    let p = p as usize;
+                    &self.near[self.near_start[p] as usize..self.near_start[p + 1] as usize]
+                })
+                .copied()
+                .collect();
+            hint.sort_unstable();
+            hint.dedup();
+        }
+        hint
+    }
+
+    /// The candidates `cand` that a receiver sees, with F·V of each.
+    fn row(&self, r: &Receiver, cand: Vec<u32>) -> Vec<(u32, f32)> {
         let (x0, n, s) = (r.x, r.n, r.surface);
         let surf = &self.surf;
         let mut out = Vec::new();
-        for p in self.candidates(r) {
+        for p in cand {
             let sh = &self.shooters[p as usize];
             if sh.surface == s {
                 continue;
@@ -448,7 +522,7 @@ impl Transport {
                         .iter()
                         .map(|&p| self.shooters[p as usize].size)
                         .fold(0.0, f64::max);
-                    self.at(mesh, v, inward, size, s)
+                    self.at(mesh, v, inward, size, patches, s)
                 })
                 .collect();
             out.extend(part);
@@ -462,8 +536,27 @@ impl Transport {
     }
 
     /// Frees the stored centre rows (the iteration is over; the geometry
-    /// stays for [`Transport::at`]).
-    pub fn drop_rows(&mut self) {
+    /// stays for [`Transport::at`]), keeping, when not every patch is
+    /// tried, each row's patches as the candidates of the points near that
+    /// centre (delta-coded: about 1.3 bytes a pair instead of 8).
+    pub fn compact_rows(&mut self) {
+        if self.rays > 0 {
+            let np = self.shooters.len();
+            let mut seen = Vec::new();
+            let mut seen_start = Vec::with_capacity(np + 1);
+            seen_start.push(0);
+            for q in 0..np {
+                let mut prev = 0;
+                for &p in &self.patch[self.start[q]..self.start[q + 1]] {
+                    write_varint(&mut seen, p - prev);
+                    prev = p;
+                }
+                seen_start.push(seen.len());
+            }
+            seen.shrink_to_fit();
+            self.seen = seen;
+            self.seen_start = seen_start;
+        }
         self.start = Vec::new();
         self.patch = Vec::new();
         self.weight = Vec::new();
@@ -472,16 +565,38 @@ impl Transport {
     /// The irradiance at the mesh vertex `v` from patches of radiosity `s`
     /// (a patch corner, or a vertex made by the refinement after the tail):
     /// its row, computed, used and dropped. `inward` points from `v` into
-    /// its surface; `size` is the size of its patches.
-    pub fn at(&self, mesh: &Mesh, v: VertId, inward: DVec3, size: f64, s: &[Rgb]) -> Rgb {
-        let row = self.row(&Receiver {
+    /// its surface; `size` is the size of its patches; `at` are the patches
+    /// it lies in (or on): after [`Transport::compact_rows`], their
+    /// neighbours' centre rows are its candidates.
+    pub fn at(
+        &self,
+        mesh: &Mesh,
+        v: VertId,
+        inward: DVec3,
+        size: f64,
+        at: &[u32],
+        s: &[Rgb],
+    ) -> Rgb {
+        let r = Receiver {
             x: mesh.receiver_pos(v),
             n: mesh.vertex_normal(v),
             surface: mesh.vertex_surface(v).0,
             inward,
             size,
             seed: mix(v.0 as u64),
-        });
+        };
+        // Hints on the vertex's own surface only (a vertex stitched onto a
+        // neighbour's edge may be named by that neighbour's element).
+        let cand = if self.seen_start.is_empty()
+            || !at
+                .iter()
+                .all(|&p| self.surf.get(p as usize) == Some(&r.surface))
+        {
+            self.candidates(&r)
+        } else {
+            self.near_candidates(at)
+        };
+        let row = self.row(&r, cand);
         let mut h = [0.0; 3];
         for (p, w) in row {
             let b = s[p as usize];
@@ -506,7 +621,71 @@ impl Transport {
             + self.pts.capacity() * size_of::<DVec3>()
             + self.surf.capacity() * 4
             + self.bvh.len() * size_of::<Triangle>()
+            + self.near_start.capacity() * 4
+            + self.near.capacity() * 4
+            + self.seen_start.capacity() * 8
+            + self.seen.capacity()
     }
+}
+
+/// Appends `x` as an LEB128 varint.
+fn write_varint(out: &mut Vec<u8>, mut x: u32) {
+    while x >= 0x80 {
+        out.push((x as u8) | 0x80);
+        x >>= 7;
+    }
+    out.push(x as u8);
+}
+
+/// Reads one LEB128 varint (`None` at the end).
+fn read_varint<'a>(bytes: &mut impl Iterator<Item = &'a u8>) -> Option<u32> {
+    let (mut x, mut shift) = (0u32, 0);
+    loop {
+        let b = *bytes.next()?;
+        x |= ((b & 0x7f) as u32) << shift;
+        if b < 0x80 {
+            return Some(x);
+        }
+        shift += 7;
+    }
+}
+
+/// Per patch, the patches that share a corner vertex with it (itself
+/// included), as a compressed list (see `Transport::near`).
+fn patches_sharing_a_corner(mesh: &Mesh) -> (Vec<u32>, Vec<u32>) {
+    let nv = mesh.num_vertices();
+    let mut count = vec![0u32; nv + 1];
+    for p in mesh.patches() {
+        for &v in mesh.patch_corners(p) {
+            count[v.idx() + 1] += 1;
+        }
+    }
+    for i in 0..nv {
+        count[i + 1] += count[i];
+    }
+    let mut fill = count.clone();
+    let mut at = vec![0u32; count[nv] as usize];
+    for p in mesh.patches() {
+        for &v in mesh.patch_corners(p) {
+            at[fill[v.idx()] as usize] = p.0;
+            fill[v.idx()] += 1;
+        }
+    }
+    let mut start = Vec::with_capacity(mesh.num_patches() + 1);
+    start.push(0);
+    let mut near = Vec::new();
+    let mut row = Vec::new();
+    for p in mesh.patches() {
+        row.clear();
+        for &v in mesh.patch_corners(p) {
+            row.extend_from_slice(&at[count[v.idx()] as usize..count[v.idx() + 1] as usize]);
+        }
+        row.sort_unstable();
+        row.dedup();
+        near.extend_from_slice(&row);
+        start.push(near.len() as u32);
+    }
+    (start, near)
 }
 
 /// Per surface, the surfaces whose bounding boxes touch its own (within a

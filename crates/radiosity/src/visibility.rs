@@ -1,7 +1,7 @@
 //! Which vertices a shooter sees: the [`Visibility`] trait and its CPU
 //! ray-cast implementation (the reference, and the fallback without a GPU).
 
-use geom::bvh::{Node, Triangle, build_nodes, ray_triangle, slab, slab_entry};
+use geom::bvh::{Node, Triangle, build_nodes, ray_triangle, slab_entry};
 use glam::DVec3;
 use libmesh::{Mesh, SurfaceId, VertId};
 use rayon::prelude::*;
@@ -61,7 +61,9 @@ pub trait Visibility: Sync {
 
     /// A triangle (of a surface other than `a` and `b`) that the open
     /// segment from → to crosses, if the implementation can name one: the
-    /// solver uses it to find whole patches hidden behind one triangle.
+    /// solver uses it to find whole patches hidden behind one triangle (the
+    /// ray caster names the nearest to `from`: from a light the nearest
+    /// blocker casts the widest shadow, as a rule).
     /// The default names none.
     fn blocker(
         &self,
@@ -167,17 +169,20 @@ impl RayVisibility {
         tmax: f64,
         keep: impl Fn(u32) -> bool,
     ) -> bool {
-        self.first_hit(origin, dir, tmin, tmax, keep).is_some()
+        self.first_hit(origin, dir, tmin, tmax, false, keep)
+            .is_some()
     }
 
-    /// The first triangle found (in traversal order, not the nearest) whose
-    /// surface passes `keep` and that is hit with `tmin < t < tmax`.
+    /// The first triangle found (in traversal order; the nearest when
+    /// `nearest`) whose surface passes `keep` and that is hit with
+    /// `tmin < t < tmax`.
     fn first_hit(
         &self,
         origin: DVec3,
         dir: DVec3,
         tmin: f64,
-        tmax: f64,
+        mut tmax: f64,
+        nearest: bool,
         keep: impl Fn(u32) -> bool,
     ) -> Option<&Tri> {
         if self.nodes.is_empty() {
@@ -185,18 +190,22 @@ impl RayVisibility {
         }
         let inv = DVec3::ONE / dir;
         let root = &self.nodes[0];
-        if !slab(root.lo, root.hi, origin, inv, tmin, tmax) {
-            return None;
-        }
+        let t0 = slab_entry(root.lo, root.hi, origin, inv, tmin, tmax)?;
         // Nearer child first: a ray toward a vertex in another room is
         // usually stopped by a wall near its start, so the boxes near the
         // origin are the likely place of a hit. Whether anything is hit
         // does not depend on the order, so the answers do not change.
-        let mut stack = [0u32; 64];
+        let mut stack = [(0u32, 0.0f64); 64];
+        stack[0] = (0, t0);
         let mut sp = 1usize;
+        let mut best = None;
         while sp > 0 {
             sp -= 1;
-            let n = &self.nodes[stack[sp] as usize];
+            let (ni, entry) = stack[sp];
+            if entry > tmax {
+                continue;
+            }
+            let n = &self.nodes[ni as usize];
             if n.count > 0 {
                 for t in &self.tris[n.first as usize..(n.first + n.count) as usize] {
                     if !keep(t.surface) {
@@ -206,7 +215,11 @@ impl RayVisibility {
                         && tt > tmin
                         && tt < tmax
                     {
-                        return Some(t);
+                        if !nearest {
+                            return Some(t);
+                        }
+                        best = Some(t);
+                        tmax = tt;
                     }
                 }
             } else {
@@ -218,24 +231,28 @@ impl RayVisibility {
                 match (ta, tb) {
                     (Some(x), Some(y)) => {
                         // The far one first: the near one is popped next.
-                        let (far, near) = if x <= y { (b, a) } else { (a, b) };
+                        let (far, near) = if x <= y {
+                            ((b, y), (a, x))
+                        } else {
+                            ((a, x), (b, y))
+                        };
                         stack[sp] = far;
                         stack[sp + 1] = near;
                         sp += 2;
                     }
-                    (Some(_), None) => {
-                        stack[sp] = a;
+                    (Some(x), None) => {
+                        stack[sp] = (a, x);
                         sp += 1;
                     }
-                    (None, Some(_)) => {
-                        stack[sp] = b;
+                    (None, Some(y)) => {
+                        stack[sp] = (b, y);
                         sp += 1;
                     }
                     (None, None) => {}
                 }
             }
         }
-        None
+        best
     }
 }
 
@@ -276,7 +293,7 @@ impl Visibility for RayVisibility {
     }
 
     fn blocker(&self, from: DVec3, to: DVec3, a: SurfaceId, b: SurfaceId) -> Option<[DVec3; 3]> {
-        self.first_hit(from, to - from, 1e-7, 1.0 - 1e-7, |id| {
+        self.first_hit(from, to - from, 1e-7, 1.0 - 1e-7, true, |id| {
             id != a.0 && id != b.0
         })
         .map(|t| self.triangle(t).p)

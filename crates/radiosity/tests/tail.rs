@@ -160,7 +160,7 @@ fn the_tail_agrees_with_shooting_to_the_end_in_a_lit_room() {
     // Surfaces: the lamp, the room's six faces, the block's six (one on the floor, dark).
     assert_eq!(want.len(), 13);
     let mut errors = Vec::new();
-    for rays in [0, 256, 64] {
+    for rays in [0, 256, 16] {
         let s = solve(
             &model,
             Options {
@@ -188,7 +188,9 @@ fn the_tail_agrees_with_shooting_to_the_end_in_a_lit_room() {
     assert!(errors[0].0 < 0.012 && errors[0].1 < 0.07, "{errors:?}");
     // 256 rays: about the same.
     assert!(errors[1].0 < 0.012 && errors[1].1 < 0.07, "{errors:?}");
-    // Fewer rays miss more: the test can tell.
+    // Far fewer rays miss more: the test can tell. (At 64 rays the room
+    // was within 1%: the corners try what the patch centres around them
+    // found; at 16 it is 19% off.)
     assert!(errors[2].0 > errors[1].0 + 0.01, "{errors:?}");
 }
 
