@@ -413,28 +413,54 @@ pub fn slab_entry(lo: DVec3, hi: DVec3, o: DVec3, inv: DVec3, tmin: f64, tmax: f
     (tn <= tf).then_some(tn)
 }
 
-/// Möller–Trumbore: the ray parameter of the hit, if the ray meets the triangle (either side).
+/// The ray parameter of the hit, if the ray meets the triangle (either
+/// side): the watertight test of Woop, Benthin and Wald (2013). The
+/// triangle is moved into a frame where the ray runs along +z from the
+/// origin, and the ray meets it when the three edge functions (twice the
+/// signed areas of the sub-triangles around the ray) have one sign, zero
+/// counted as either. An edge's function depends only on its two corners,
+/// and is exactly negated for the neighbour that runs it the other way, so
+/// a ray through an edge or corner shared by triangles of one surface hits
+/// at least one of them: no cracks between a surface's triangles. (With
+/// Möller–Trumbore, rays through shared edges could pass between the two
+/// triangles: a blocker's own surface leaked light to points it hides.)
 #[inline]
 pub fn ray_triangle(o: DVec3, d: DVec3, t: &Triangle) -> Option<f64> {
-    let e1 = t.p[1] - t.p[0];
-    let e2 = t.p[2] - t.p[0];
-    let pv = d.cross(e2);
-    let det = e1.dot(pv);
+    // The axis along which the direction is largest becomes z.
+    let a = d.abs();
+    let kz = if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    };
+    let mut kx = (kz + 1) % 3;
+    let mut ky = (kx + 1) % 3;
+    if d[kz] < 0.0 {
+        std::mem::swap(&mut kx, &mut ky); // keep the frame's handedness
+    }
+    if d[kz] == 0.0 || !d[kz].is_finite() {
+        return None;
+    }
+    let (sx, sy, sz) = (d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
+    let rel = |p: DVec3| p - o;
+    let (pa, pb, pc) = (rel(t.p[0]), rel(t.p[1]), rel(t.p[2]));
+    let (ax, ay) = (pa[kx] - sx * pa[kz], pa[ky] - sy * pa[kz]);
+    let (bx, by) = (pb[kx] - sx * pb[kz], pb[ky] - sy * pb[kz]);
+    let (cx, cy) = (pc[kx] - sx * pc[kz], pc[ky] - sy * pc[kz]);
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return None;
+    }
+    let det = u + v + w;
     if det == 0.0 || !det.is_finite() {
         return None;
     }
-    let inv = 1.0 / det;
-    let tv = o - t.p[0];
-    let u = tv.dot(pv) * inv;
-    if !(0.0..=1.0).contains(&u) {
-        return None;
-    }
-    let qv = tv.cross(e1);
-    let v = d.dot(qv) * inv;
-    if v < 0.0 || u + v > 1.0 {
-        return None;
-    }
-    Some(e2.dot(qv) * inv)
+    let tt = (u * pa[kz] + v * pb[kz] + w * pc[kz]) * sz;
+    Some(tt / det)
 }
 
 /// Triangles covering a planar face with holes (constrained Delaunay in the
@@ -548,6 +574,58 @@ mod tests {
 #[cfg(test)]
 mod slab_tests {
     use super::*;
+
+    /// Rays aimed at points of the edges shared by a surface's triangles
+    /// (a fan around an off-centre point of a skewed, tilted polygon) hit
+    /// at least one of them: no cracks. Möller–Trumbore, the test before,
+    /// let 4,949 of these 196,000 rays through (checked when this test was
+    /// written).
+    #[test]
+    fn rays_through_shared_edges_do_not_pass_between_triangles() {
+        let mut z = 0x2545_f491_4f6c_dd1du64;
+        let mut rnd = || {
+            z ^= z << 13;
+            z ^= z >> 7;
+            z ^= z << 17;
+            (z >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut missed = 0;
+        for _ in 0..2000 {
+            // A polygon of 7 corners in a random plane, fanned from a point.
+            let origin = DVec3::new(rnd() * 10.0, rnd() * 10.0, rnd() * 3.0);
+            let (u, v) = DVec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5)
+                .normalize()
+                .any_orthonormal_pair();
+            // (Near enough to `origin` for the fan not to fold.)
+            let centre = origin + u * (rnd() * 0.01) + v * (rnd() * 0.01);
+            let ring: Vec<DVec3> = (0..7)
+                .map(|k| {
+                    let a = std::f64::consts::TAU * (k as f64 + rnd() * 0.5) / 7.0;
+                    let r = 0.5 + rnd();
+                    origin + u * (a.cos() * r) + v * (a.sin() * r)
+                })
+                .collect();
+            let tris: Vec<Triangle> = (0..7)
+                .map(|k| Triangle {
+                    p: [centre, ring[k], ring[(k + 1) % 7]],
+                    id: k as u32,
+                })
+                .collect();
+            let eye = origin + (u.cross(v) * (1.0 + rnd())) + u * (rnd() - 0.5);
+            for k in 0..7 {
+                for _ in 0..14 {
+                    // A point of the spoke centre → ring[k], shared by two triangles.
+                    let s = rnd();
+                    let aim = centre + (ring[k] - centre) * s;
+                    let d = aim - eye;
+                    if !tris.iter().any(|t| ray_triangle(eye, d, t).is_some()) {
+                        missed += 1;
+                    }
+                }
+            }
+        }
+        assert_eq!(missed, 0, "rays passed between triangles");
+    }
 
     #[test]
     fn a_ray_in_the_plane_of_a_box_face_enters_the_box() {

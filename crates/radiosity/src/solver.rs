@@ -289,6 +289,11 @@ pub struct Solver<'v> {
     shot: Vec<Rgb>,
     emitted: f64,
     vis: &'v dyn Visibility,
+    /// Per surface whose patches make one convex polygon, its outline
+    /// (`outline[outline_start[s]..outline_start[s + 1]]`, empty for the
+    /// others): a blocker's whole surface hides what lies in its shadow.
+    outline_start: Vec<u32>,
+    outline: Vec<DVec3>,
     opts: Options,
     penumbra_size: f64,
     gradient: f64,
@@ -373,7 +378,14 @@ impl<'v> Solver<'v> {
         let gradient = opts.gradient.unwrap_or(0.1 * mean_b);
         let min_edge = opts.min_edge.unwrap_or(mean_edge / 8.0);
         let nv = mesh.num_vertices();
+        let (outline_start, outline) = if vis.names_blockers() {
+            convex_outlines(&mesh)
+        } else {
+            (vec![0; ns + 1], Vec::new())
+        };
         Solver {
+            outline_start,
+            outline,
             mesh,
             rho,
             emit,
@@ -1841,13 +1853,28 @@ impl<'v> Solver<'v> {
         }
         let mesh = &self.mesh;
         let np = mesh.num_patches();
-        let flags: Vec<bool> = (0..np)
+        // Per patch, what hides it whole: a blocker's convex surface or one
+        // triangle.
+        enum By {
+            Outline(SurfaceId),
+            Triangle([DVec3; 3]),
+        }
+        let hides = |by: &By, x: &[DVec3]| match by {
+            By::Outline(b) => polygon_shadows(
+                c,
+                &self.outline[self.outline_start[b.idx()] as usize
+                    ..self.outline_start[b.idx() + 1] as usize],
+                x,
+            ),
+            By::Triangle(t) => shadows(c, *t, x),
+        };
+        let flags: Vec<Option<By>> = (0..np)
             .into_par_iter()
             .map(|p| {
                 let pid = PatchId(p as u32);
                 let s = mesh.patch_surface(pid);
                 if s == shooter {
-                    return false;
+                    return None;
                 }
                 // Patches are triangles and quads: no allocation per patch.
                 let corners = mesh.patch_corners(pid);
@@ -1860,30 +1887,33 @@ impl<'v> Solver<'v> {
                 // vertex of it is a candidate anyway.
                 let n = mesh.surface_normal(s);
                 if n.dot(c - x[0]) <= 0.0 || x.iter().all(|&xi| normal.dot(xi - c) < 0.0) {
-                    return false;
+                    return None;
                 }
                 // The blocker met toward a corner, else toward the centre
                 // (coincident walls, or a patch straddling two blockers'
                 // shadows: a second chance).
                 let centre = x.iter().copied().sum::<DVec3>() / x.len() as f64;
-                [x[0], centre].iter().any(|&aim| {
-                    self.vis
-                        .blocker(c, aim, shooter, s)
-                        .is_some_and(|t| shadows(c, t, x))
+                [x[0], centre].iter().find_map(|&aim| {
+                    let (t, b) = self.vis.blocker(c, aim, shooter, s)?;
+                    let by = if self.outline_start[b.idx()] < self.outline_start[b.idx() + 1] {
+                        By::Outline(b)
+                    } else {
+                        By::Triangle(t)
+                    };
+                    hides(&by, x).then_some(by)
                 })
             })
             .collect();
         let mut bits = vec![0u64; mesh.num_vertices().div_ceil(64)];
-        for (p, &h) in flags.iter().enumerate() {
-            if h {
-                for e in mesh.patch_leaves(PatchId(p as u32)) {
-                    for v in mesh.elem_corners(e) {
-                        // A vertex on the surface's boundary receives at a
-                        // point stepped into its surface, perhaps into a
-                        // neighbouring patch: left to the rays.
-                        if !mesh.receiver_stepped(*v) {
-                            bits[v.idx() / 64] |= 1 << (v.idx() % 64);
-                        }
+        for (p, by) in flags.iter().enumerate() {
+            let Some(by) = by else { continue };
+            for e in mesh.patch_leaves(PatchId(p as u32)) {
+                for v in mesh.elem_corners(e) {
+                    // A vertex on the surface's boundary receives at a point
+                    // stepped into its surface, perhaps into a neighbouring
+                    // patch: that point itself must be hidden.
+                    if !mesh.receiver_stepped(*v) || hides(by, &[mesh.receiver_pos(*v)]) {
+                        bits[v.idx() / 64] |= 1 << (v.idx() % 64);
                     }
                 }
             }
@@ -2195,6 +2225,124 @@ impl Solver<'_> {
         let mut colours = Colours::new(self, src);
         self.mesh.write_ug_with(src, &mut colours, out)
     }
+}
+
+/// Per surface, the outline of its patches when they make one convex
+/// polygon (a wall, a slab, a door: most surfaces of a building), else
+/// nothing; as a compressed list (see `Solver::outline`). The outline is
+/// the loop of patch edges that no other patch of the surface shares,
+/// with collinear points dropped; convex when every turn goes the same way.
+fn convex_outlines(mesh: &Mesh) -> (Vec<u32>, Vec<DVec3>) {
+    let ns = mesh.num_surfaces();
+    let mut by_surface: Vec<Vec<PatchId>> = vec![Vec::new(); ns];
+    for p in mesh.patches() {
+        by_surface[mesh.patch_surface(p).idx()].push(p);
+    }
+    let mut start = Vec::with_capacity(ns + 1);
+    start.push(0u32);
+    let mut out = Vec::new();
+    for (s, patches) in by_surface.iter().enumerate() {
+        if let Some(poly) = convex_outline(mesh, SurfaceId(s as u32), patches) {
+            out.extend(poly);
+        }
+        start.push(out.len() as u32);
+    }
+    (start, out)
+}
+
+fn convex_outline(mesh: &Mesh, s: SurfaceId, patches: &[PatchId]) -> Option<Vec<DVec3>> {
+    let mut edges: rustc_hash::FxHashSet<(u32, u32)> = Default::default();
+    for &p in patches {
+        let c = mesh.patch_corners(p);
+        for i in 0..c.len() {
+            edges.insert((c[i].0, c[(i + 1) % c.len()].0));
+        }
+    }
+    // The boundary: edges whose reverse no patch has; one out of each vertex.
+    let mut next: rustc_hash::FxHashMap<u32, u32> = Default::default();
+    for &(a, b) in &edges {
+        if !edges.contains(&(b, a)) && next.insert(a, b).is_some() {
+            return None; // two boundary edges leave a vertex: not one simple loop
+        }
+    }
+    let &first = next.keys().min()?;
+    let mut loop_ = vec![first];
+    let mut v = next[&first];
+    while v != first {
+        if loop_.len() > next.len() {
+            return None;
+        }
+        loop_.push(v);
+        v = *next.get(&v)?;
+    }
+    if loop_.len() != next.len() {
+        return None; // a hole, or several pieces
+    }
+    let pts: Vec<DVec3> = loop_.iter().map(|&v| mesh.vertex_pos(VertId(v))).collect();
+    let n = mesh.surface_normal(s);
+    let k = pts.len();
+    let mut poly = Vec::with_capacity(k);
+    let (mut left, mut right) = (false, false);
+    for i in 0..k {
+        let (a, b, c) = (pts[(i + k - 1) % k], pts[i], pts[(i + 1) % k]);
+        let (e1, e2) = (b - a, c - b);
+        let turn = e1.cross(e2).dot(n);
+        let scale = e1.length() * e2.length();
+        if turn.abs() > 1e-12 * scale {
+            // A corner (collinear points are dropped).
+            left |= turn > 0.0;
+            right |= turn < 0.0;
+            poly.push(b);
+        } else if e1.dot(e2) < 0.0 {
+            return None; // the loop turns back on itself
+        }
+    }
+    // Every corner turns the same way (either, as the patches run), once
+    // around (a star's corners turn one way too).
+    let k = poly.len();
+    let turning: f64 = (0..k)
+        .map(|i| {
+            let (a, b, c) = (poly[(i + k - 1) % k], poly[i], poly[(i + 1) % k]);
+            (b - a).angle_between(c - b)
+        })
+        .sum();
+    (k >= 3 && !(left && right) && (turning - std::f64::consts::TAU).abs() < 1e-6).then_some(poly)
+}
+
+/// Whether the convex polygon `o` (counter-clockwise about its normal)
+/// hides every point of `x` from `c`: each strictly beyond its plane and
+/// seen through its interior, 1e-7 of its size inside the outline (the
+/// one-triangle test's margin). Convex both, the patch is then hidden whole.
+fn polygon_shadows(c: DVec3, o: &[DVec3], x: &[DVec3]) -> bool {
+    let k = o.len();
+    let n = (1..k - 1)
+        .map(|i| (o[i] - o[0]).cross(o[i + 1] - o[0]))
+        .sum::<DVec3>();
+    let side_c = n.dot(c - o[0]);
+    if side_c == 0.0 || !side_c.is_finite() {
+        return false;
+    }
+    let size = (0..k)
+        .map(|i| (o[(i + 1) % k] - o[i]).length())
+        .fold(0.0, f64::max);
+    let margin = 1e-7 * size;
+    x.iter().all(|&xi| {
+        let side_x = n.dot(xi - o[0]);
+        if side_x * side_c >= 0.0 {
+            return false;
+        }
+        let tt = side_c / (side_c - side_x);
+        if !(1e-6..=1.0 - 1e-6).contains(&tt) {
+            return false;
+        }
+        let q = c + (xi - c) * tt;
+        (0..k).all(|i| {
+            let (a, b) = (o[i], o[(i + 1) % k]);
+            let e = b - a;
+            // Distance of q inside edge a→b, in the polygon's plane.
+            e.cross(q - a).dot(n) >= margin * e.length() * n.length()
+        })
+    })
 }
 
 #[cfg(test)]

@@ -63,7 +63,7 @@ pub trait Visibility: Sync {
     /// segment from → to crosses, if the implementation can name one: the
     /// solver uses it to find whole patches hidden behind one triangle (the
     /// ray caster names the nearest to `from`: from a light the nearest
-    /// blocker casts the widest shadow, as a rule).
+    /// blocker casts the widest shadow, as a rule), and its surface.
     /// The default names none.
     fn blocker(
         &self,
@@ -71,7 +71,7 @@ pub trait Visibility: Sync {
         _to: DVec3,
         _a: SurfaceId,
         _b: SurfaceId,
-    ) -> Option<[DVec3; 3]> {
+    ) -> Option<([DVec3; 3], SurfaceId)> {
         None
     }
 }
@@ -292,11 +292,17 @@ impl Visibility for RayVisibility {
         true
     }
 
-    fn blocker(&self, from: DVec3, to: DVec3, a: SurfaceId, b: SurfaceId) -> Option<[DVec3; 3]> {
+    fn blocker(
+        &self,
+        from: DVec3,
+        to: DVec3,
+        a: SurfaceId,
+        b: SurfaceId,
+    ) -> Option<([DVec3; 3], SurfaceId)> {
         self.first_hit(from, to - from, 1e-7, 1.0 - 1e-7, true, |id| {
             id != a.0 && id != b.0
         })
-        .map(|t| self.triangle(t).p)
+        .map(|t| (self.triangle(t).p, SurfaceId(t.surface)))
     }
 }
 
