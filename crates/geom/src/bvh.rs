@@ -612,11 +612,11 @@ mod slab_tests {
                 })
                 .collect();
             let eye = origin + (u.cross(v) * (1.0 + rnd())) + u * (rnd() - 0.5);
-            for k in 0..7 {
+            for &corner in &ring {
                 for _ in 0..14 {
-                    // A point of the spoke centre → ring[k], shared by two triangles.
+                    // A point of the spoke centre → corner, shared by two triangles.
                     let s = rnd();
-                    let aim = centre + (ring[k] - centre) * s;
+                    let aim = centre + (corner - centre) * s;
                     let d = aim - eye;
                     if !tris.iter().any(|t| ray_triangle(eye, d, t).is_some()) {
                         missed += 1;
