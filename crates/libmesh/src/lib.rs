@@ -471,6 +471,28 @@ impl Mesh {
     }
 
     /// The patch's leaves, depth first with children in order.
+    /// Calls `f` on each leaf element of patch `p`, in the order of
+    /// [`Mesh::patch_leaves`] and [`Mesh::leaves`], without allocating.
+    #[inline]
+    pub fn for_each_patch_leaf(&self, p: PatchId, mut f: impl FnMut(ElemId)) {
+        let mut stack = [0u32; 4 * (MAX_LEVEL as usize + 1)];
+        let mut sp = 1;
+        stack[0] = p.0;
+        while sp > 0 {
+            sp -= 1;
+            let e = stack[sp];
+            let el = &self.elems[e as usize];
+            if el.is_leaf() {
+                f(ElemId(e));
+            } else {
+                for c in (0..4).rev() {
+                    stack[sp] = el.children + c;
+                    sp += 1;
+                }
+            }
+        }
+    }
+
     pub fn patch_leaves(&self, p: PatchId) -> Vec<ElemId> {
         let mut out = Vec::new();
         let mut stack = vec![p.0];

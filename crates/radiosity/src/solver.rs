@@ -21,22 +21,19 @@ fn add(a: Rgb, b: Rgb) -> Rgb {
 fn scale(a: Rgb, s: f64) -> Rgb {
     [a[0] * s, a[1] * s, a[2] * s]
 }
-/// `f` of every leaf of `mesh` that gives something, in leaf order: a
-/// chunk of leaves at a time in parallel (a list of all leaves would cost
-/// 4 bytes per leaf).
+/// `f` of every leaf of `mesh` that gives something, in leaf order: the
+/// patches in parallel, each walking its own tree (the serial walk of all
+/// leaves was a tenth of a building's shots).
 fn scan_leaves<T: Send>(mesh: &Mesh, f: impl Fn(ElemId) -> Option<T> + Sync) -> Vec<T> {
-    let mut out = Vec::new();
-    let mut chunk: Vec<ElemId> = Vec::with_capacity(CHUNK);
-    let mut leaves = mesh.leaves();
-    loop {
-        chunk.clear();
-        chunk.extend(leaves.by_ref().take(CHUNK));
-        if chunk.is_empty() {
-            return out;
-        }
-        let part: Vec<T> = chunk.par_iter().filter_map(|&e| f(e)).collect();
-        out.extend(part);
-    }
+    let parts: Vec<Vec<T>> = (0..mesh.num_patches() as u32)
+        .into_par_iter()
+        .map(|p| {
+            let mut out = Vec::new();
+            mesh.for_each_patch_leaf(PatchId(p), |e| out.extend(f(e)));
+            out
+        })
+        .collect();
+    parts.into_iter().flatten().collect()
 }
 
 /// How steep an edge is: the largest ratio, over the channels, of the
@@ -80,8 +77,6 @@ fn sum(a: Rgb) -> f64 {
     a[0] + a[1] + a[2]
 }
 
-/// Leaves handled per parallel batch when scanning all leaves.
-const CHUNK: usize = 1 << 16;
 /// Shots kept for re-shooting at new vertices beyond the emitters' first
 /// light (see `Solver::regather`).
 const HISTORY_CAP: usize = 64;
@@ -445,14 +440,14 @@ impl<'v> Solver<'v> {
     /// light ([`Solver::quadrature`]).
     pub fn patch_energy(&self, p: PatchId) -> Rgb {
         let mut acc = self.pcorr[p.idx()];
-        for e in self.mesh.patch_leaves(p) {
+        self.mesh.for_each_patch_leaf(p, |e| {
             let c = self.mesh.elem_corners(e);
             let mut b = [0.0; 3];
             for &v in c {
                 b = add(b, self.radiosity(v));
             }
             acc = add(acc, scale(b, self.mesh.elem_area(e) / c.len() as f64));
-        }
+        });
         acc
     }
 
@@ -1460,18 +1455,11 @@ impl<'v> Solver<'v> {
     /// Energy received by the elements from the current shot (Σ area × mean
     /// corner ΔH) and the part of it they reflect.
     fn received(&self) -> (f64, f64) {
-        let mut acc = (0.0, 0.0);
-        let mut chunk: Vec<ElemId> = Vec::with_capacity(CHUNK);
-        let mut leaves = self.mesh.leaves();
-        loop {
-            chunk.clear();
-            chunk.extend(leaves.by_ref().take(CHUNK));
-            if chunk.is_empty() {
-                break;
-            }
-            let parts: Vec<(f64, f64)> = chunk
-                .par_iter()
-                .map(|&e| {
+        let parts: Vec<(f64, f64)> = (0..self.mesh.num_patches() as u32)
+            .into_par_iter()
+            .map(|p| {
+                let mut acc = (0.0, 0.0);
+                self.mesh.for_each_patch_leaf(PatchId(p), |e| {
                     let c = self.mesh.elem_corners(e);
                     let mut d = [0.0; 3];
                     for &v in c {
@@ -1479,13 +1467,16 @@ impl<'v> Solver<'v> {
                     }
                     let w = self.mesh.elem_area(e) / c.len() as f64;
                     let r = self.rho[self.mesh.elem_surface(e).idx()];
-                    (sum(d) * w, (d[0] * r[0] + d[1] * r[1] + d[2] * r[2]) * w)
-                })
-                .collect();
-            // Summed in leaf order: the same bits at any thread count.
-            acc = parts.iter().fold(acc, |(a, b), (x, y)| (a + x, b + y));
-        }
-        acc
+                    acc.0 += sum(d) * w;
+                    acc.1 += (d[0] * r[0] + d[1] * r[1] + d[2] * r[2]) * w;
+                });
+                acc
+            })
+            .collect();
+        // Summed in patch order: the same bits at any thread count.
+        parts
+            .iter()
+            .fold((0.0, 0.0), |(a, b), (x, y)| (a + x, b + y))
     }
 
     /// Adds ΔB·F to the irradiance of the given vertices that see the shooter
@@ -1855,6 +1846,7 @@ impl<'v> Solver<'v> {
         let np = mesh.num_patches();
         // Per patch, what hides it whole: a blocker's convex surface or one
         // triangle.
+        #[derive(Clone)]
         enum By {
             Outline(SurfaceId),
             Triangle([DVec3; 3]),
@@ -1868,46 +1860,68 @@ impl<'v> Solver<'v> {
             ),
             By::Triangle(t) => shadows(c, *t, x),
         };
+        // What hides patch `p` whole, if anything: `last` (what hid the
+        // patch before), else the blocker met toward a corner, else toward
+        // the centre (coincident walls, or a patch straddling two blockers'
+        // shadows: a second chance).
+        let hidden_by = |p: usize, last: Option<&By>| -> Option<By> {
+            let pid = PatchId(p as u32);
+            let s = mesh.patch_surface(pid);
+            if s == shooter {
+                return None;
+            }
+            // Patches are triangles and quads: no allocation per patch.
+            let corners = mesh.patch_corners(pid);
+            let mut buf = [DVec3::ZERO; 4];
+            for (b, &v) in buf.iter_mut().zip(corners) {
+                *b = mesh.vertex_pos(v);
+            }
+            let x = &buf[..corners.len().min(4)];
+            // Not facing the shooter, or wholly behind its plane: no vertex
+            // of it is a candidate anyway.
+            let n = mesh.surface_normal(s);
+            if n.dot(c - x[0]) <= 0.0 || x.iter().all(|&xi| normal.dot(xi - c) < 0.0) {
+                return None;
+            }
+            // (A patch of the blocker's own surface lies in its plane, and
+            // is never in its shadow.)
+            if let Some(by) = last.filter(|by| hides(by, x)) {
+                return Some(by.clone());
+            }
+            let centre = x.iter().copied().sum::<DVec3>() / x.len() as f64;
+            [x[0], centre].iter().find_map(|&aim| {
+                let (t, b) = self.vis.blocker(c, aim, shooter, s)?;
+                let by = if self.outline_start[b.idx()] < self.outline_start[b.idx() + 1] {
+                    By::Outline(b)
+                } else {
+                    By::Triangle(t)
+                };
+                hides(&by, x).then_some(by)
+            })
+        };
+        // Patches in runs of 64 (one surface's neighbours, mostly), each
+        // first tried against what hid the one before it: a blocker ray
+        // saved where the same wall hides the next patch.
         let flags: Vec<Option<By>> = (0..np)
             .into_par_iter()
-            .map(|p| {
-                let pid = PatchId(p as u32);
-                let s = mesh.patch_surface(pid);
-                if s == shooter {
-                    return None;
-                }
-                // Patches are triangles and quads: no allocation per patch.
-                let corners = mesh.patch_corners(pid);
-                let mut buf = [DVec3::ZERO; 4];
-                for (b, &v) in buf.iter_mut().zip(corners) {
-                    *b = mesh.vertex_pos(v);
-                }
-                let x = &buf[..corners.len().min(4)];
-                // Not facing the shooter, or wholly behind its plane: no
-                // vertex of it is a candidate anyway.
-                let n = mesh.surface_normal(s);
-                if n.dot(c - x[0]) <= 0.0 || x.iter().all(|&xi| normal.dot(xi - c) < 0.0) {
-                    return None;
-                }
-                // The blocker met toward a corner, else toward the centre
-                // (coincident walls, or a patch straddling two blockers'
-                // shadows: a second chance).
-                let centre = x.iter().copied().sum::<DVec3>() / x.len() as f64;
-                [x[0], centre].iter().find_map(|&aim| {
-                    let (t, b) = self.vis.blocker(c, aim, shooter, s)?;
-                    let by = if self.outline_start[b.idx()] < self.outline_start[b.idx() + 1] {
-                        By::Outline(b)
-                    } else {
-                        By::Triangle(t)
-                    };
-                    hides(&by, x).then_some(by)
-                })
+            .chunks(64)
+            .flat_map_iter(|run| {
+                let mut last: Option<By> = None;
+                run.into_iter()
+                    .map(|p| {
+                        let by = hidden_by(p, last.as_ref());
+                        if let Some(b) = &by {
+                            last = Some(b.clone());
+                        }
+                        by
+                    })
+                    .collect::<Vec<_>>()
             })
             .collect();
         let mut bits = vec![0u64; mesh.num_vertices().div_ceil(64)];
         for (p, by) in flags.iter().enumerate() {
             let Some(by) = by else { continue };
-            for e in mesh.patch_leaves(PatchId(p as u32)) {
+            mesh.for_each_patch_leaf(PatchId(p as u32), |e| {
                 for v in mesh.elem_corners(e) {
                     // A vertex on the surface's boundary receives at a point
                     // stepped into its surface, perhaps into a neighbouring
@@ -1916,7 +1930,7 @@ impl<'v> Solver<'v> {
                         bits[v.idx() / 64] |= 1 << (v.idx() % 64);
                     }
                 }
-            }
+            });
         }
         Some(bits)
     }
