@@ -2424,7 +2424,8 @@ mod tests {
             }
         }
         // The second room's floor is behind the wall, the floor under the
-        // box behind its top.
-        assert!(hidden > 100, "{hidden} of {checked}");
+        // box behind its top. (768 found with the blockers' convex
+        // outlines; one triangle at a time found 103.)
+        assert!(hidden > 500, "{hidden} of {checked}");
     }
 }
