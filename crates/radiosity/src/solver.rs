@@ -2364,6 +2364,64 @@ mod tests {
     use super::*;
     use crate::RayVisibility;
 
+    /// A surface's outline is kept when its patches make one convex polygon
+    /// (collinear boundary points dropped), not for an L, a ring or a
+    /// face with a hole; and a convex outline hides what lies in its
+    /// shadow, not what is beside it or in front.
+    #[test]
+    fn convex_outlines_and_their_shadows() {
+        let src = "c_rgb g 0.5 0.5 0.5;
+            v a 0 0 0; v b 4 0 0; v c 4 3 0; v d 0 3 0;
+            v l0 10 0 0; v l1 14 0 0; v l2 14 1 0; v l3 11 1 0; v l4 11 3 0; v l5 10 3 0;
+            v h0 20 0 0; v h1 24 0 0; v h2 24 4 0; v h3 20 4 0;
+            v i0 21 1 0; v i1 21 3 0; v i2 23 3 0; v i3 23 1 0;
+            f rect (a b c d) g; f ell (l0 l1 l2 l3 l4 l5) g;
+            f holed (h0 h1 h2 h3) (i0 i1 i2 i3) g;";
+        let model = ug::parse(src.as_bytes(), "t").unwrap().model;
+        let opts = libmesh::patch::Options {
+            len: 0.7,
+            eps: 1e-9,
+            angle: 25.0,
+            quads: true,
+        };
+        let model = libmesh::patch::cut(&model, opts).unwrap().0;
+        let mesh = Mesh::from_model(&model, 1e-9).unwrap();
+        assert_eq!(mesh.num_surfaces(), 3);
+        let (start, pts) = convex_outlines(&mesh);
+        let outline = |s: usize| &pts[start[s] as usize..start[s + 1] as usize];
+        // The rectangle, cut into many patches, is its four corners.
+        let rect = outline(0);
+        assert_eq!(rect.len(), 4, "{rect:?}");
+        for corner in [
+            DVec3::ZERO,
+            DVec3::new(4.0, 0.0, 0.0),
+            DVec3::new(4.0, 3.0, 0.0),
+            DVec3::new(0.0, 3.0, 0.0),
+        ] {
+            assert!(
+                rect.iter().any(|p| (*p - corner).length() < 1e-12),
+                "{rect:?}"
+            );
+        }
+        assert!(outline(1).is_empty(), "an L is not convex");
+        assert!(outline(2).is_empty(), "a face with a hole is not one loop");
+        // Its shadow from a point above: a small square below it is hidden,
+        // one reaching past its edge or lying above it is not.
+        let c = DVec3::new(2.0, 1.5, 5.0);
+        let square = |x: f64, y: f64, z: f64, r: f64| {
+            [
+                DVec3::new(x - r, y - r, z),
+                DVec3::new(x + r, y - r, z),
+                DVec3::new(x + r, y + r, z),
+                DVec3::new(x - r, y + r, z),
+            ]
+        };
+        assert!(polygon_shadows(c, rect, &square(2.0, 1.5, -1.0, 0.5)));
+        assert!(!polygon_shadows(c, rect, &square(4.5, 1.5, -1.0, 0.5)));
+        assert!(!polygon_shadows(c, rect, &square(2.0, 1.5, 1.0, 0.5)));
+        assert!(!polygon_shadows(c, rect, &square(2.0, 1.5, 0.0, 0.5)));
+    }
+
     /// Every vertex of a patch found hidden behind one triangle is occluded
     /// by the ray caster too (the culling never changes an answer), and the
     /// culling finds something: two rooms with a wall between them (no
