@@ -179,34 +179,57 @@ impl Bvh {
                     }
                 }
             } else if sp + 2 <= stack.len() {
-                let (a, b) = (n.first, n.first + 1);
-                let (na, nb) = (&self.nodes[a as usize], &self.nodes[b as usize]);
-                let ea = slab_entry(na.lo, na.hi, origin, inv, tmin, *tmax);
-                let eb = slab_entry(nb.lo, nb.hi, origin, inv, tmin, *tmax);
-                match (ea, eb) {
-                    (Some(ea), Some(eb)) => {
-                        // The farther one below, so the nearer pops first.
-                        if eb < ea {
-                            stack[sp] = (a, ea);
-                            stack[sp + 1] = (b, eb);
-                        } else {
-                            stack[sp] = (b, eb);
-                            stack[sp + 1] = (a, ea);
-                        }
-                        sp += 2;
-                    }
-                    (Some(e), None) => {
-                        stack[sp] = (a, e);
-                        sp += 1;
-                    }
-                    (None, Some(e)) => {
-                        stack[sp] = (b, e);
-                        sp += 1;
-                    }
-                    (None, None) => {}
-                }
+                push_children(
+                    &self.nodes,
+                    n,
+                    origin,
+                    inv,
+                    tmin,
+                    *tmax,
+                    &mut stack,
+                    &mut sp,
+                );
             }
         }
+    }
+}
+
+/// Pushes the children of the inner node `n` that the ray (`inv` = 1/d per
+/// component) meets within [tmin, tmax] onto `stack` above `sp`, each with
+/// its entry parameter, the nearer on top (popped first; the first child
+/// when they tie). The caller makes room for two.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub fn push_children(
+    nodes: &[Node],
+    n: &Node,
+    o: DVec3,
+    inv: DVec3,
+    tmin: f64,
+    tmax: f64,
+    stack: &mut [(u32, f64)],
+    sp: &mut usize,
+) {
+    let (a, b) = (n.first, n.first + 1);
+    let (na, nb) = (&nodes[a as usize], &nodes[b as usize]);
+    let ea = slab_entry(na.lo, na.hi, o, inv, tmin, tmax);
+    let eb = slab_entry(nb.lo, nb.hi, o, inv, tmin, tmax);
+    let mut push = |e: (u32, f64)| {
+        stack[*sp] = e;
+        *sp += 1;
+    };
+    match (ea, eb) {
+        (Some(x), Some(y)) if y < x => {
+            push((a, x));
+            push((b, y));
+        }
+        (Some(x), Some(y)) => {
+            push((b, y));
+            push((a, x));
+        }
+        (Some(x), None) => push((a, x)),
+        (None, Some(y)) => push((b, y)),
+        (None, None) => {}
     }
 }
 

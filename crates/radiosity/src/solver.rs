@@ -1809,36 +1809,6 @@ impl<'v> Solver<'v> {
     /// receiver point is not the vertex (on a surface's boundary) are not
     /// culled: that point may lie in a neighbouring patch.
     fn hidden_patches(&self, c: DVec3, shooter: SurfaceId, normal: DVec3) -> Option<Vec<u64>> {
-        // Whether the triangle `t` hides every point of `x` from `c`.
-        let shadows = |c: DVec3, t: [DVec3; 3], x: &[DVec3]| {
-            let tn = (t[1] - t[0]).cross(t[2] - t[0]);
-            let side_c = tn.dot(c - t[0]);
-            if side_c == 0.0 {
-                return false;
-            }
-            let (e1, e2) = (t[1] - t[0], t[2] - t[0]);
-            let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
-            let den = d11 * d22 - d12 * d12;
-            if den <= 0.0 {
-                return false;
-            }
-            x.iter().all(|&xi| {
-                let side_x = tn.dot(xi - t[0]);
-                // Strictly on the other side.
-                if side_x * side_c >= 0.0 {
-                    return false;
-                }
-                let tt = side_c / (side_c - side_x);
-                if !(1e-6..=1.0 - 1e-6).contains(&tt) {
-                    return false;
-                }
-                let q = c + (xi - c) * tt - t[0];
-                let (q1, q2) = (q.dot(e1), q.dot(e2));
-                let b1 = (d22 * q1 - d12 * q2) / den;
-                let b2 = (d11 * q2 - d12 * q1) / den;
-                b1 >= 1e-7 && b2 >= 1e-7 && 1.0 - b1 - b2 >= 1e-7
-            })
-        };
         if !self.vis.names_blockers() {
             return None;
         }
@@ -1858,7 +1828,7 @@ impl<'v> Solver<'v> {
                     ..self.outline_start[b.idx() + 1] as usize],
                 x,
             ),
-            By::Triangle(t) => shadows(c, *t, x),
+            By::Triangle(t) => polygon_shadows(c, t, x),
         };
         // What hides patch `p` whole, if anything: `last` (what hid the
         // patch before), else the blocker met toward a corner, else toward
@@ -2323,10 +2293,10 @@ fn convex_outline(mesh: &Mesh, s: SurfaceId, patches: &[PatchId]) -> Option<Vec<
     (k >= 3 && !(left && right) && (turning - std::f64::consts::TAU).abs() < 1e-6).then_some(poly)
 }
 
-/// Whether the convex polygon `o` (counter-clockwise about its normal)
-/// hides every point of `x` from `c`: each strictly beyond its plane and
-/// seen through its interior, 1e-7 of its size inside the outline (the
-/// one-triangle test's margin). Convex both, the patch is then hidden whole.
+/// Whether the convex polygon `o` (a surface's outline, or one blocker
+/// triangle) hides every point of `x` from `c`: each strictly beyond its
+/// plane and seen through its interior, 1e-7 of its size inside the
+/// outline. Convex both, the patch is then hidden whole.
 fn polygon_shadows(c: DVec3, o: &[DVec3], x: &[DVec3]) -> bool {
     let k = o.len();
     let n = (1..k - 1)

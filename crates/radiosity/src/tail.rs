@@ -43,7 +43,7 @@
 //!   room's ceiling next to its lamp came out 17% dark at `-l 3%`.
 //! * **Which patches a vertex sees** (a corner, or a split vertex that
 //!   gathers): those seen from the centres of the patches that share a
-//!   corner with its own (on any surface), whose rows are kept, delta-coded,
+//!   corner with its own (on its own surface), whose rows are kept, delta-coded,
 //!   once the iteration is over. Nearby centres together see nearly what
 //!   the vertex sees, and many of them miss less than one point's discovery
 //!   rays: on a nine-room building at `-l 2%` the answer was 0.11% below the
@@ -148,8 +148,8 @@ pub(crate) struct Transport {
     start: Vec<usize>,
     patch: Vec<u32>,
     weight: Vec<f32>,
-    /// Per patch, the patches sharing a corner with it (itself included),
-    /// sorted: `near[near_start[p]..near_start[p + 1]]`.
+    /// Per patch, the patches of its surface sharing a corner with it
+    /// (itself included), sorted: `near[near_start[p]..near_start[p + 1]]`.
     near_start: Vec<u32>,
     near: Vec<u32>,
     /// Once the iteration is over ([`Transport::compact_rows`]), row `q`'s
@@ -257,9 +257,7 @@ impl Transport {
                     tr.near_patches(&[q as u32], 1)
                         .into_iter()
                         .map(|nb| nb as usize)
-                        .filter(|&nb| {
-                            nb != q && (q0..q1).contains(&nb) && tr.surf[nb] == tr.surf[q]
-                        })
+                        .filter(|&nb| nb != q && (q0..q1).contains(&nb))
                         .collect()
                 };
                 let own: Vec<Vec<(u32, u32, DVec3)>> = (q0..q1)
@@ -529,24 +527,7 @@ impl Transport {
     ) -> Option<(Vec<VertId>, Vec<Rgb>)> {
         let nv = mesh.num_vertices();
         // The patches at each corner (for its inward direction and size).
-        let mut count = vec![0u32; nv + 1];
-        for p in mesh.patches() {
-            for &v in mesh.patch_corners(p) {
-                count[v.idx() + 1] += 1;
-            }
-        }
-        for i in 0..nv {
-            count[i + 1] += count[i];
-        }
-        let mut fill = count.clone();
-        let mut at = vec![0u32; count[nv] as usize];
-        for p in mesh.patches() {
-            for &v in mesh.patch_corners(p) {
-                at[fill[v.idx()] as usize] = p.0;
-                fill[v.idx()] += 1;
-            }
-        }
-        drop(fill);
+        let (count, at) = patches_at_corners(mesh);
         let recv: Vec<VertId> = (0..nv)
             .filter(|&v| {
                 count[v + 1] > count[v]
@@ -701,9 +682,9 @@ fn read_varint<'a>(bytes: &mut impl Iterator<Item = &'a u8>) -> Option<u32> {
     }
 }
 
-/// Per patch, the patches that share a corner vertex with it (itself
-/// included), as a compressed list (see `Transport::near`).
-fn patches_sharing_a_corner(mesh: &Mesh) -> (Vec<u32>, Vec<u32>) {
+/// Per vertex, the patches it is a corner of, as a compressed list:
+/// `at[count[v]..count[v + 1]]`.
+fn patches_at_corners(mesh: &Mesh) -> (Vec<u32>, Vec<u32>) {
     let nv = mesh.num_vertices();
     let mut count = vec![0u32; nv + 1];
     for p in mesh.patches() {
@@ -722,6 +703,14 @@ fn patches_sharing_a_corner(mesh: &Mesh) -> (Vec<u32>, Vec<u32>) {
             fill[v.idx()] += 1;
         }
     }
+    (count, at)
+}
+
+/// Per patch, the patches of its surface that share a corner vertex with
+/// it (itself included; vertices are per surface), as a compressed list
+/// (see `Transport::near`).
+fn patches_sharing_a_corner(mesh: &Mesh) -> (Vec<u32>, Vec<u32>) {
+    let (count, at) = patches_at_corners(mesh);
     let mut start = Vec::with_capacity(mesh.num_patches() + 1);
     start.push(0);
     let mut near = Vec::new();

@@ -1,7 +1,7 @@
 //! Which vertices a shooter sees: the [`Visibility`] trait and its CPU
 //! ray-cast implementation (the reference, and the fallback without a GPU).
 
-use geom::bvh::{Node, Triangle, build_nodes, ray_triangle, slab_entry};
+use geom::bvh::{Node, Triangle, build_nodes, push_children, ray_triangle, slab_entry};
 use glam::DVec3;
 use libmesh::{Mesh, SurfaceId, VertId};
 use rayon::prelude::*;
@@ -224,32 +224,7 @@ impl RayVisibility {
                 }
             } else {
                 assert!(sp + 2 <= stack.len(), "BVH deeper than its traversal stack");
-                let (a, b) = (n.first, n.first + 1);
-                let (na, nb) = (&self.nodes[a as usize], &self.nodes[b as usize]);
-                let ta = slab_entry(na.lo, na.hi, origin, inv, tmin, tmax);
-                let tb = slab_entry(nb.lo, nb.hi, origin, inv, tmin, tmax);
-                match (ta, tb) {
-                    (Some(x), Some(y)) => {
-                        // The far one first: the near one is popped next.
-                        let (far, near) = if x <= y {
-                            ((b, y), (a, x))
-                        } else {
-                            ((a, x), (b, y))
-                        };
-                        stack[sp] = far;
-                        stack[sp + 1] = near;
-                        sp += 2;
-                    }
-                    (Some(x), None) => {
-                        stack[sp] = (a, x);
-                        sp += 1;
-                    }
-                    (None, Some(y)) => {
-                        stack[sp] = (b, y);
-                        sp += 1;
-                    }
-                    (None, None) => {}
-                }
+                push_children(&self.nodes, n, origin, inv, tmin, tmax, &mut stack, &mut sp);
             }
         }
         best
