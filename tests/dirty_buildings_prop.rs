@@ -8,7 +8,8 @@
 //! faces, vertex jitter), over 200 seeds:
 //!
 //! * after the full chain (planar | group | orient | isect | copl | clean)
-//!   `ugcheck` finds no defect at all (`--deny defects` would pass);
+//!   `ugcheck` finds no defect at all (`--deny defects` would pass), both
+//!   before and after ugclean's removal of enclosed faces;
 //! * `ugisect` and `ugcopl` keep the area of every material (to the
 //!   tolerance snapping at epsilon allows: features within epsilon of each
 //!   other are merged, which moves area by up to epsilon times their length;
@@ -111,7 +112,16 @@ fn one(seed: u64) -> Vec<String> {
     let (oriented, _) = clean::orient::orient(grouped.clone(), &opts).expect("oriented");
     let (cut, _) = clean::isect::isect(&oriented, eps).expect("isect");
     let (copl, _) = clean::copl::copl(&cut, eps).expect("copl");
-    let (cleaned, _) = clean::coincident::clean(&copl, eps);
+    let (coincident, _) = clean::coincident::clean(&copl, eps);
+    let report = check::check(&coincident, eps);
+    if report.defects() > 0 {
+        problems.push(format!(
+            "chain to the coincident faces: {}",
+            defects(&report)
+        ));
+    }
+    // ugclean's second step, the enclosed faces: still no defect.
+    let (cleaned, _) = clean::enclosed::remove(&coincident, eps);
     let report = check::check(&cleaned, eps);
     if report.defects() > 0 {
         problems.push(format!("chain: {}", defects(&report)));

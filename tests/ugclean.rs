@@ -97,3 +97,224 @@ fn idempotent_deterministic_and_a_no_op_without_coincident_faces() {
         );
     }
 }
+
+/// The chain up to ugcopl on a small dirty CAD building (two storeys).
+fn building_to_copl(seed: &str) -> String {
+    let mut m = run_ok(
+        "ugbuilding",
+        &["--cad", "--faces", "900", "--storeys", "2", "--seed", seed],
+        None,
+    );
+    for tool in ["ugplanar", "ugvlmerge", "ugflip", "ugisect", "ugcopl"] {
+        m = run_ok(tool, &[], Some(m.as_bytes()));
+    }
+    m
+}
+
+/// A point inside a face (on its largest triangle, off its edges) and its
+/// unit normal.
+fn inner_point(m: &ug::Model, f: ug::FaceId) -> (glam::DVec3, glam::DVec3) {
+    let pts: Vec<Vec<glam::DVec3>> = m.faces[f.idx()]
+        .contours
+        .iter()
+        .map(|c| c.iter().map(|&v| m.pos(v)).collect())
+        .collect();
+    let n = geom::polygon::face_normal(&pts).expect("a face with a normal");
+    let flat: Vec<glam::DVec3> = pts.iter().flatten().copied().collect();
+    let t = geom::bvh::face_triangles(&pts)
+        .into_iter()
+        .map(|t| [flat[t[0]], flat[t[1]], flat[t[2]]])
+        .max_by(|a, b| {
+            let area = |p: &[glam::DVec3; 3]| (p[1] - p[0]).cross(p[2] - p[0]).length();
+            area(a).total_cmp(&area(b))
+        })
+        .unwrap();
+    (t[0] * 0.2 + t[1] * 0.3 + t[2] * 0.5, n)
+}
+
+/// The light test of the enclosed faces, by ugprobe's path tracer (nothing
+/// of ugclean's rays): in `model`, every face but the emitters becomes grey
+/// (ρ = 0.5, so that light bounces far), inside a sky box that emits too.
+/// Returns, for each face in `probe`, whether light reaches the point
+/// inside it (B > 0 at 64 paths).
+fn reached(model: &str, probe: &[ug::FaceId]) -> Vec<bool> {
+    use ug::{Defmat, Face, Item, Material, MaterialDef, Vertex};
+    let mut m = ug::parse(model.as_bytes(), "chain").unwrap().model;
+    let emit = m.add_material(Material {
+        name: "sky_emitter".into(),
+        def: MaterialDef::Defmat(Defmat {
+            diffuse: Some([0.0; 3]),
+            emission: Some([1.0; 3]),
+            other: vec![],
+        }),
+    });
+    let grey = m.add_material(Material {
+        name: "all_grey".into(),
+        def: MaterialDef::Rgb([0.5; 3]),
+    });
+    // The new materials first, so that every face names a defined one.
+    let mats: Vec<Item> = m.items.drain(m.items.len() - 2..).collect();
+    m.items.splice(0..0, mats);
+    let faces: Vec<ug::FaceId> = m.top_faces().collect();
+    for &f in &faces {
+        let face = &mut m.faces[f.idx()];
+        if !face
+            .material
+            .is_some_and(|x| m.materials[x.idx()].is_emitter())
+        {
+            face.material = Some(grey);
+        }
+    }
+    let (lo, hi) = m.bounds().unwrap();
+    let (lo, hi) = (lo - glam::DVec3::ONE, hi + glam::DVec3::ONE);
+    let corner: Vec<ug::VertexId> = (0..8)
+        .map(|i| {
+            let p = glam::DVec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            );
+            m.add_vertex(Vertex {
+                name: format!("sky{i}"),
+                pos: p,
+                color: None,
+            })
+        })
+        .collect();
+    // Facing inwards.
+    for (k, q) in [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ]
+    .iter()
+    .enumerate()
+    {
+        m.add_face(Face {
+            name: Some(format!("sky{k}")),
+            contours: vec![q.iter().map(|&i| corner[i]).collect()],
+            material: Some(emit),
+        });
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let model_path = dir.path().join("vis.ug");
+    std::fs::write(&model_path, ug::write_string(&m)).unwrap();
+    let points: String = probe
+        .iter()
+        .map(|&f| {
+            let (p, n) = inner_point(&m, f);
+            format!("{} {} {} {} {} {}\n", p.x, p.y, p.z, n.x, n.y, n.z)
+        })
+        .collect();
+    let points_path = dir.path().join("points");
+    std::fs::write(&points_path, points).unwrap();
+    let out = run_ok(
+        "ugprobe",
+        &[
+            model_path.to_str().unwrap(),
+            "--points",
+            points_path.to_str().unwrap(),
+            "--samples",
+            "64",
+            "-q",
+        ],
+        None,
+    );
+    let b: Vec<bool> = out
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .map(|l| {
+            let w: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            w[6] + w[7] + w[8] > 0.0
+        })
+        .collect();
+    assert_eq!(b.len(), probe.len());
+    b
+}
+
+#[test]
+fn enclosed_faces_go_and_no_light_reached_them() {
+    // Twelve seeds passed when this was written; four keep CI quick.
+    for seed in ["1", "4", "7", "12"] {
+        let copl = building_to_copl(seed);
+        let all = run_ok("ugclean", &["--keep-enclosed"], Some(copl.as_bytes()));
+        let out = run_ok("ugclean", &[], Some(copl.as_bytes()));
+        let (before, after) = (faces(&all), faces(&out));
+        let kept: std::collections::HashSet<String> = after.iter().cloned().collect();
+        let removed = before.len() - after.len();
+        // The step does something: on these buildings about half the
+        // faces the chain leaves are inside walls, slabs and furniture.
+        assert!(
+            removed * 3 > before.len(),
+            "seed {seed}: {removed} of {} removed",
+            before.len()
+        );
+        // And leaves the model clean.
+        let r = ugkit::run("ugcheck", &["--deny", "defects"], Some(out.as_bytes()));
+        assert!(
+            r.status.success(),
+            "seed {seed}: {}",
+            String::from_utf8_lossy(&r.stdout)
+        );
+        // No path of light from a kept face (or the sky) reaches a removed
+        // one wider than 20 epsilon (the jitter leaves slivers between
+        // features within epsilon, where inside and outside are below the
+        // model's resolution: a wall bottom 1e-6 above a slab's side).
+        let eps = check(&all)["epsilon"].as_f64().unwrap();
+        let m = ug::parse(all.as_bytes(), "all").unwrap().model;
+        let width = |f: ug::FaceId| {
+            let pts: Vec<Vec<glam::DVec3>> = m.faces[f.idx()]
+                .contours
+                .iter()
+                .map(|c| c.iter().map(|&v| m.pos(v)).collect())
+                .collect();
+            let perimeter: f64 = pts
+                .iter()
+                .map(|c| {
+                    (0..c.len())
+                        .map(|i| c[i].distance(c[(i + 1) % c.len()]))
+                        .sum::<f64>()
+                })
+                .sum();
+            2.0 * geom::face_area(&pts).abs() / perimeter
+        };
+        let gone: Vec<ug::FaceId> = m
+            .top_faces()
+            .filter(|&f| !kept.contains(m.faces[f.idx()].name.as_deref().unwrap_or("")))
+            .filter(|&f| width(f) > 20.0 * eps)
+            .collect();
+        assert!(
+            gone.len() * 2 > removed,
+            "seed {seed}: most removed faces are tested"
+        );
+        let lit = reached(&all, &gone);
+        let bad: Vec<&str> = gone
+            .iter()
+            .zip(&lit)
+            .filter(|p| *p.1)
+            .map(|(&f, _)| m.faces[f.idx()].name.as_deref().unwrap_or(""))
+            .collect();
+        assert!(
+            bad.is_empty(),
+            "seed {seed}: light reaches removed faces {bad:?}"
+        );
+        // The probe does see light where it comes: more than half the kept
+        // faces are reached (500 of 811 on seed 1; the rest are in rooms
+        // without a lamp or a window, or lit too rarely for 64 paths).
+        let some: Vec<ug::FaceId> = m
+            .top_faces()
+            .filter(|&f| kept.contains(m.faces[f.idx()].name.as_deref().unwrap_or("")))
+            .filter(|&f| width(f) > 20.0 * eps)
+            .collect();
+        let lit = reached(&all, &some);
+        let n = lit.iter().filter(|&&x| x).count();
+        assert!(
+            n * 2 > some.len(),
+            "seed {seed}: {n} of {} reached",
+            some.len()
+        );
+    }
+}

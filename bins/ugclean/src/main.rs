@@ -1,4 +1,4 @@
-//! ugclean: remove coincident faces.
+//! ugclean: remove coincident faces, then enclosed ones.
 
 use clap::Parser;
 
@@ -6,15 +6,23 @@ const EXAMPLES: &str = "\
 Examples:
   ugclean < in.ug > clean.ug
   ugvlmerge < in.ug | ugisect | ugcopl | ugclean -v | ugcut -l 2
-  ugclean -e 0.001 model.ug -o clean.ug";
+  ugclean -e 0.001 model.ug -o clean.ug
+  ugclean --keep-enclosed < in.ug > clean.ug   # only the coincident faces";
 
 /// Remove one face of every coincident pair (coplanar, same region, facing
 /// the same way): with the same material the later face goes; with different
 /// materials the piece from the larger original surface goes (the floor under
 /// the rug), read from ugcopl's `{ugcopl origin NAME area A}` annotations or
 /// measured as the connected coplanar surface of the face's material.
-/// Faces back to back (a zero-thickness wall's two sides) stay. Instances
-/// are flattened first.
+/// Faces back to back (a zero-thickness wall's two sides) stay.
+///
+/// Then the enclosed faces go: those that no light can reach and no one
+/// see, because everything in front of them is the back of some face — the
+/// floor under a wall's foot, the part of a wall inside the wall crossing
+/// it, the legs of a table below the floor. Rays from each face decide
+/// (see README); emitters, faces seen from outside and closed dark rooms
+/// stay. This changes the area per material; --keep-enclosed keeps them.
+/// Instances are flattened first.
 #[derive(Parser, Debug)]
 #[command(version, after_help = EXAMPLES)]
 struct Args {
@@ -23,6 +31,12 @@ struct Args {
     /// Distance tolerance in model units (default: 1e-6 of the bounding-box diagonal).
     #[arg(short = 'e', long = "epsilon", value_parser = cli::parse_epsilon)]
     epsilon: Option<f64>,
+    /// Keep the enclosed faces (those that only the backs of faces surround:
+    /// the floor under a wall's foot, the part of a wall inside the wall
+    /// crossing it); by default they are removed. With it, the area of
+    /// every material is kept.
+    #[arg(long)]
+    keep_enclosed: bool,
 }
 
 fn main() -> std::process::ExitCode {
@@ -30,6 +44,11 @@ fn main() -> std::process::ExitCode {
     let c = &args.common;
     cli::filter(c, args.epsilon, |model, eps| {
         let (out, st) = clean::coincident::clean(&model, eps);
+        let (out, enc) = if args.keep_enclosed {
+            (out, clean::enclosed::Stats::default())
+        } else {
+            clean::enclosed::remove(&out, eps)
+        };
         if c.verbose > 0 {
             eprintln!(
                 "epsilon {eps:e}; {} coincident pairs; removed {} faces, area {}",
@@ -39,6 +58,18 @@ fn main() -> std::process::ExitCode {
             );
             for (r, k, why) in &st.removed {
                 eprintln!("  removed {r} (kept {k}): {why}");
+            }
+            if !args.keep_enclosed {
+                eprintln!(
+                    "{} enclosed faces removed, area {}",
+                    enc.removed.len(),
+                    enc.area_removed
+                );
+                if c.verbose > 1 {
+                    for r in &enc.removed {
+                        eprintln!("  enclosed {r}");
+                    }
+                }
             }
         }
         Ok(out)

@@ -170,6 +170,13 @@ pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
             .removed
             .push((label(m, loser, lf), label(m, winner, faces[winner]), reason));
     }
+    (remove_faces(m, &removed), stats)
+}
+
+/// The model without the faces marked in `removed` (indexed by `FaceId`),
+/// the vertices that only they used, and their `ugcopl origin` annotations.
+pub fn remove_faces(m: &Model, removed: &[bool]) -> Model {
+    let faces: Vec<FaceId> = m.top_faces().collect();
     // Vertices still used by a face or wire.
     let mut used = vec![false; m.vertices.len()];
     let mut was_used = vec![false; m.vertices.len()];
@@ -209,5 +216,5 @@ pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
         k += 1;
         keep[k - 1]
     });
-    (out, stats)
+    out
 }

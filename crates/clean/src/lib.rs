@@ -11,6 +11,7 @@
 //! | [`isect`] | ugisect | [`isect::isect`] | cut intersecting faces (§2.5) |
 //! | [`copl`] | ugcopl | [`copl::copl`] | cut coplanar overlapping faces (§2.5) |
 //! | [`coincident`] | ugclean | [`coincident::clean`] | drop one face of each coincident pair (§2.6) |
+//! | [`enclosed`] | ugclean | [`enclosed::remove`] | drop the faces no light can reach (inside solids) |
 //!
 //! Every step takes the distance tolerance `eps` (model units) explicitly;
 //! pair tests come from the `check` crate, so a step removes exactly what
@@ -18,6 +19,7 @@
 
 pub mod coincident;
 pub mod copl;
+pub mod enclosed;
 pub mod group;
 pub mod isect;
 pub mod orient;
