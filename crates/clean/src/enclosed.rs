@@ -26,7 +26,8 @@
 //! wall's other side) is met within `eps`; a front met within `eps` at an
 //! angle is a ray through a corner (where a floor meets a wall) and does
 //! not count. Components are found with 16 rays a point (a face whose first
-//! point met only fronts is in open space and casts no more); the faces
+//! point met only fronts is in open space, one whose first point met only
+//! backs is alone in a solid, and neither casts from more points); the faces
 //! found enclosed cast 32 more a point and 16 grazing ones (0.3° above the
 //! plane: a slit 1 cm high a metre away, between a ceiling and a lamp hung
 //! below it, lets them out), and stop at the first front of a
@@ -175,8 +176,10 @@ pub fn enclosed(m: &Model, eps: f64) -> Vec<bool> {
         let frame = Frame::new(DVec3::ZERO, n);
         for (i, &c) in points.iter().enumerate() {
             // A face whose first point met only fronts is in open space
-            // (a room, the outside): its other points add nothing.
-            if i == 1 && seen.backs == 0 && live.is_none() {
+            // (a room, the outside): its other points add nothing. One
+            // whose first point met only backs is alone inside a solid: if
+            // it is found enclosed, the second pass casts from every point.
+            if i == 1 && live.is_none() && (seen.backs == 0 || seen.fronts.is_empty()) {
                 break;
             }
             let o = c + n * lift;
