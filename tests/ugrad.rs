@@ -689,3 +689,35 @@ fn a_closed_box_absorbs_what_its_lamp_emits() {
     // came out short), +0.09% with the centre sample (`quadrature`).
     assert!(balance.abs() < 2e-3, "{balance}");
 }
+
+#[test]
+fn a_dim_little_emitter_does_not_hold_back_the_tail() {
+    // Once the panel has shot, every reflector carries more energy than the
+    // 2 cm dot, so shooting by energy alone left the dot to the end: the
+    // tail waited for every emitter, and 8,960 reflectors shot first (52 s;
+    // 13,060 at ugcut's default length, 105 s). The emitters still unshot
+    // go first once the reflected light is spread thin enough: 41 shots.
+    let input = patches("rad/room-with-a-dim-dot.ug", "0.2");
+    let emitting = input
+        .lines()
+        .filter(|l| l.starts_with("f ") && (l.ends_with(" panel;") || l.ends_with(" dot;")))
+        .count();
+    assert_eq!(emitting, 26, "the panel's 25 patches and the dot");
+    let out = run(
+        "ugrad",
+        &["-v", "--visibility", "ray"],
+        Some(input.as_bytes()),
+    );
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    let after: usize = err
+        .lines()
+        .find_map(|l| l.strip_prefix("indirect tail after shot "))
+        .and_then(|r| r.split(':').next())
+        .and_then(|n| n.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no tail: {err}"));
+    assert!(
+        (emitting..=3 * emitting).contains(&after),
+        "the tail started after {after} shots: {err}"
+    );
+}

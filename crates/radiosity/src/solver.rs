@@ -498,13 +498,22 @@ impl<'v> Solver<'v> {
             }
             if self.tail.is_none() && self.opts.tail > 0.0 {
                 let max = energies.iter().map(|e| e.0).fold(0.0, f64::max);
-                if max <= self.opts.tail * total && self.emitters_shot() {
-                    let deadline = self.opts.time_limit.map(|t| start + t);
-                    match self.run_tail(interrupt.clone(), deadline) {
-                        TailEnd::Converged => return Stop::Converged,
-                        TailEnd::Stopped(s) => return s,
-                        TailEnd::NotConverged => continue,
+                if max <= self.opts.tail * total {
+                    if self.emitters_shot() {
+                        let deadline = self.opts.time_limit.map(|t| start + t);
+                        match self.run_tail(interrupt.clone(), deadline) {
+                            TailEnd::Converged => return Stop::Converged,
+                            TailEnd::Stopped(s) => return s,
+                            TailEnd::NotConverged => continue,
+                        }
                     }
+                    // The reflected light is spread thin enough for the
+                    // tail, but some emitting patches (small or dim ones:
+                    // the sides of a hanging lamp) have not shot. Their
+                    // direct light is shot exactly, before any more
+                    // reflectors: otherwise thousands of reflectors with a
+                    // little more energy shoot one at a time first.
+                    energies.retain(|&(_, p)| self.emitter_unshot(PatchId(p)));
                 }
             }
             energies.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
@@ -709,10 +718,13 @@ impl<'v> Solver<'v> {
 
     /// Whether every emitting patch has shot at least its emitted energy.
     fn emitters_shot(&self) -> bool {
-        self.mesh.patches().all(|p| {
-            let e = sum(self.emit[self.mesh.patch_surface(p).idx()]) * self.mesh.patch_area(p);
-            e <= 0.0 || sum(self.shot[p.idx()]) >= e * (1.0 - 1e-9)
-        })
+        !self.mesh.patches().any(|p| self.emitter_unshot(p))
+    }
+
+    /// Whether `p` emits and has not yet shot its emitted energy.
+    fn emitter_unshot(&self, p: PatchId) -> bool {
+        let e = sum(self.emit[self.mesh.patch_surface(p).idx()]) * self.mesh.patch_area(p);
+        e > 0.0 && sum(self.shot[p.idx()]) < e * (1.0 - 1e-9)
     }
 
     /// Runs the indirect tail (`tail.rs`) on all unshot energy and adds its
