@@ -110,23 +110,20 @@ pub fn remove(m: &Model, eps: f64) -> (Model, Stats) {
 pub fn enclosed(m: &Model, eps: f64) -> Vec<bool> {
     let faces: Vec<FaceId> = m.top_faces().collect();
     let nf = faces.len();
+    // The faces' points and planes, once: for the rays and for the pairs.
+    let (_, geoms) = check::face_geoms(m);
     let mut normals = vec![DVec3::ZERO; nf];
     let mut tris = Vec::new();
     // Per face: the centroids of its largest triangles.
     let mut samples: Vec<Vec<DVec3>> = vec![Vec::new(); nf];
-    for (k, &f) in faces.iter().enumerate() {
-        let pts: Vec<Vec<DVec3>> = m.faces[f.idx()]
-            .contours
-            .iter()
-            .map(|c| c.iter().map(|&v| m.pos(v)).collect())
-            .collect();
-        let Some(n) = geom::polygon::face_normal(&pts) else {
+    for (k, g) in geoms.iter().enumerate() {
+        let Some(g) = g else {
             continue;
         };
-        normals[k] = n;
-        let flat: Vec<DVec3> = pts.iter().flatten().copied().collect();
+        normals[k] = g.plane.n;
+        let flat: Vec<DVec3> = g.contours.iter().flatten().copied().collect();
         let mut cand = Vec::new();
-        for t in face_triangles(&pts) {
+        for t in face_triangles(&g.contours) {
             let p = [flat[t[0]], flat[t[1]], flat[t[2]]];
             let area = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length();
             if area.is_finite() && area > 0.0 {
@@ -141,7 +138,6 @@ pub fn enclosed(m: &Model, eps: f64) -> Vec<bool> {
     // A face that another face crosses or partly covers may be enclosed in
     // part only (ugisect and ugcopl leave none): it stays.
     let mut mixed = vec![false; nf];
-    let (_, geoms) = check::face_geoms(m);
     for (i, j, kind) in check::classify_pairs(&geoms, eps) {
         if matches!(
             kind,
