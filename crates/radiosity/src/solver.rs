@@ -2346,6 +2346,20 @@ mod tests {
     use super::*;
     use crate::RayVisibility;
 
+    /// A UG text cut into patches of edge `len` (ugcut's mesher), and its mesh.
+    fn patched(src: &str, len: f64) -> (ug::Model, Mesh) {
+        let model = ug::parse(src.as_bytes(), "t").unwrap().model;
+        let opts = libmesh::patch::Options {
+            len,
+            eps: 1e-9,
+            angle: 25.0,
+            quads: true,
+        };
+        let model = libmesh::patch::cut(&model, opts).unwrap().0;
+        let mesh = Mesh::from_model(&model, 1e-9).unwrap();
+        (model, mesh)
+    }
+
     /// A surface's outline is kept when its patches make one convex polygon
     /// (collinear boundary points dropped), not for an L, a ring or a
     /// face with a hole; and a convex outline hides what lies in its
@@ -2359,15 +2373,7 @@ mod tests {
             v i0 21 1 0; v i1 21 3 0; v i2 23 3 0; v i3 23 1 0;
             f rect (a b c d) g; f ell (l0 l1 l2 l3 l4 l5) g;
             f holed (h0 h1 h2 h3) (i0 i1 i2 i3) g;";
-        let model = ug::parse(src.as_bytes(), "t").unwrap().model;
-        let opts = libmesh::patch::Options {
-            len: 0.7,
-            eps: 1e-9,
-            angle: 25.0,
-            quads: true,
-        };
-        let model = libmesh::patch::cut(&model, opts).unwrap().0;
-        let mesh = Mesh::from_model(&model, 1e-9).unwrap();
+        let (_, mesh) = patched(src, 0.7);
         assert_eq!(mesh.num_surfaces(), 3);
         let (start, pts) = convex_outlines(&mesh);
         let outline = |s: usize| &pts[start[s] as usize..start[s + 1] as usize];
@@ -2424,15 +2430,7 @@ mod tests {
             f top (k4 k5 k6 k7) g; f s1 (k0 k1 k5 k4) g; f s2 (k1 k2 k6 k5) g;
             f s3 (k2 k3 k7 k6) g; f s4 (k3 k0 k4 k7) g;
             f lamp (l0 l3 l2 l1) lamp;";
-        let model = ug::parse(src.as_bytes(), "t").unwrap().model;
-        let opts = libmesh::patch::Options {
-            len: 0.5,
-            eps: 1e-9,
-            angle: 25.0,
-            quads: true,
-        };
-        let model = libmesh::patch::cut(&model, opts).unwrap().0;
-        let mesh = Mesh::from_model(&model, 1e-9).unwrap();
+        let (model, mesh) = patched(src, 0.5);
         let vis = RayVisibility::new(&mesh);
         let solver = Solver::new(mesh, &model.materials, &vis, Options::default());
         let m = &solver.mesh;
