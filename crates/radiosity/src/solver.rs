@@ -36,6 +36,41 @@ fn scan_leaves<T: Send>(mesh: &Mesh, f: impl Fn(ElemId) -> Option<T> + Sync) -> 
     parts.into_iter().flatten().collect()
 }
 
+/// [`scan_leaves`] over the given patches only (ascending: the leaves come
+/// in the order of [`Mesh::leaves`]).
+fn scan_patch_leaves<T: Send>(
+    mesh: &Mesh,
+    patches: &[PatchId],
+    f: impl Fn(ElemId) -> Option<T> + Sync,
+) -> Vec<T> {
+    let parts: Vec<Vec<T>> = patches
+        .par_iter()
+        .map(|&p| {
+            let mut out = Vec::new();
+            mesh.for_each_patch_leaf(p, |e| out.extend(f(e)));
+            out
+        })
+        .collect();
+    parts.into_iter().flatten().collect()
+}
+
+/// The patches of the surfaces of `verts`, ascending. Surfaces share no
+/// vertices, so every leaf with one of `verts` as a corner is a leaf of one
+/// of them: a scan of the leaves a shot touched need not walk the model.
+fn patches_around(mesh: &Mesh, verts: &[VertId]) -> Vec<PatchId> {
+    let mut marked = vec![0u64; mesh.num_surfaces().div_ceil(64)];
+    let mut patches = Vec::new();
+    for &v in verts {
+        let s = mesh.vertex_surface(v).idx();
+        if marked[s / 64] & (1 << (s % 64)) == 0 {
+            marked[s / 64] |= 1 << (s % 64);
+            patches.extend_from_slice(mesh.surface_patches(SurfaceId(s as u32)));
+        }
+    }
+    patches.sort_unstable();
+    patches
+}
+
 /// How steep an edge is: the largest ratio, over the channels, of the
 /// difference to its threshold (the larger of `grad` and `rel` times the
 /// larger value); above 1 it is [`steep`].
@@ -607,7 +642,9 @@ impl<'v> Solver<'v> {
         let normal = self.mesh.surface_normal(surface);
         self.gain.iter_mut().for_each(|g| *g = 0.0);
         self.d_b = d_b;
-        let reached = self.shoot_at(Targets::All, &shooters, surface, normal);
+        // The vertices this shot reached (gain > 0), in no particular order.
+        let mut lit = self.shoot_at(Targets::All, &shooters, surface, normal);
+        let reached = lit.len();
         self.shot[p.idx()] = add(self.shot[p.idx()], d_phi);
 
         // §6: gradient subdivision, re-shooting this light at the new vertices.
@@ -617,7 +654,9 @@ impl<'v> Solver<'v> {
             let rel = self.opts.gradient_relative;
             let min_edge = self.min_edge;
             let this = &*self;
-            let to_split: Vec<ElemId> = scan_leaves(&self.mesh, |e| {
+            // Only leaves with a corner this shot reached can be split.
+            let around = patches_around(&self.mesh, &lit);
+            let to_split: Vec<ElemId> = scan_patch_leaves(&self.mesh, &around, |e| {
                 let c = this.mesh.elem_corners(e);
                 if !c.iter().any(|&v| sum(this.dh(v)) > 0.0)
                     || this.mesh.elem_longest_edge(e) <= min_edge
@@ -666,21 +705,21 @@ impl<'v> Solver<'v> {
                 }
                 self.d_b = d_b;
             }
-            self.shoot_at(Targets::List(&fresh), &shooters, surface, normal);
+            lit.extend(self.shoot_at(Targets::List(&fresh), &shooters, surface, normal));
         }
         // Correct the trapezoid rule over the leaves this light reached.
         let recorded = self.history.len() < HISTORY_CAP || first_light;
-        let quad = self.quadrature(&shooters, normal, recorded && self.regathers());
+        lit.sort_unstable();
+        let quad = self.quadrature(&shooters, normal, &lit, recorded && self.regathers());
         // The emitters' first light, and the first shots: a long run
         // without the tail (`--tail 0`) keeps the rest out, and new vertices
         // take their share by §6's mean (see `regather`).
         if self.regathers() && (self.history.len() < HISTORY_CAP || first_light) {
-            let (mesh, gain) = (&self.mesh, &self.gain);
-            let (lo, hi) = (0..mesh.num_vertices())
-                .into_par_iter()
-                .filter(|&v| gain[v] > 0.0)
-                .map(|v| {
-                    let x = mesh.vertex_pos(VertId(v as u32));
+            let mesh = &self.mesh;
+            let (lo, hi) = lit
+                .par_iter()
+                .map(|&v| {
+                    let x = mesh.vertex_pos(v);
                     (x, x)
                 })
                 .reduce(
@@ -697,7 +736,7 @@ impl<'v> Solver<'v> {
             });
         }
 
-        let (received, reflected) = self.received();
+        let (received, reflected) = self.received(&lit);
         let (received, reflected) = (received + quad.0, reflected + quad.1);
         let unshot = self.unshot_fraction();
         let stats = ShotStats {
@@ -1244,6 +1283,7 @@ impl<'v> Solver<'v> {
         &mut self,
         shooters: &[(Vec<DVec3>, DVec3)],
         normal: DVec3,
+        lit: &[VertId],
         exact: bool,
     ) -> (f64, f64) {
         let mesh = &self.mesh;
@@ -1264,19 +1304,17 @@ impl<'v> Solver<'v> {
             }
             Some(f)
         };
-        let fu: Vec<f64> = (0..mesh.num_vertices())
-            .into_par_iter()
-            .map(|v| {
-                let g = gain[v];
-                if g <= 0.0 {
-                    return 0.0;
-                }
-                let v = VertId(v as u32);
+        // The unoccluded form factor of each vertex reached (`lit`, sorted).
+        let fu: Vec<f64> = lit
+            .par_iter()
+            .map(|&v| {
                 // A moved receiver: its light as shot.
-                unoccluded(mesh.receiver_pos(v), mesh.vertex_normal(v)).unwrap_or(g)
+                unoccluded(mesh.receiver_pos(v), mesh.vertex_normal(v)).unwrap_or(gain[v.idx()])
             })
             .collect();
-        let found: Vec<(ElemId, f64)> = scan_leaves(mesh, |e| {
+        let fu_of = |v: VertId| lit.binary_search(&v).map_or(0.0, |k| fu[k]);
+        let around = patches_around(mesh, lit);
+        let found: Vec<(ElemId, f64)> = scan_patch_leaves(mesh, &around, |e| {
             let cs = mesh.elem_corners(e);
             let (mut t, mut tu) = (0.0, 0.0);
             for &v in cs {
@@ -1285,7 +1323,7 @@ impl<'v> Solver<'v> {
                     return None;
                 }
                 t += g;
-                tu += fu[v.idx()];
+                tu += fu_of(v);
             }
             let k = cs.len() as f64;
             let (t, tu) = (t / k, tu / k);
@@ -1466,12 +1504,13 @@ impl<'v> Solver<'v> {
 
     /// Energy received by the elements from the current shot (Σ area × mean
     /// corner ΔH) and the part of it they reflect.
-    fn received(&self) -> (f64, f64) {
-        let parts: Vec<(f64, f64)> = (0..self.mesh.num_patches() as u32)
+    /// `lit`: the vertices the shot reached (the others add exactly 0).
+    fn received(&self, lit: &[VertId]) -> (f64, f64) {
+        let parts: Vec<(f64, f64)> = patches_around(&self.mesh, lit)
             .into_par_iter()
             .map(|p| {
                 let mut acc = (0.0, 0.0);
-                self.mesh.for_each_patch_leaf(PatchId(p), |e| {
+                self.mesh.for_each_patch_leaf(p, |e| {
                     let c = self.mesh.elem_corners(e);
                     let mut d = [0.0; 3];
                     for &v in c {
@@ -1493,15 +1532,16 @@ impl<'v> Solver<'v> {
 
     /// Adds ΔB·F to the irradiance of the given vertices that see the shooter
     /// elements (ΔB the current shot's `d_b`; F summed over the shooters into
-    /// `gain`, which must be 0 for the targets); returns how many vertices
-    /// received something.
+    /// `gain`, which must be 0 for the targets); returns the vertices that
+    /// received something, in id order for [`Targets::All`], else in the
+    /// list's order.
     fn shoot_at(
         &mut self,
         targets: Targets,
         shooters: &[(Vec<DVec3>, DVec3)],
         surface: SurfaceId,
         normal: DVec3,
-    ) -> usize {
+    ) -> Vec<VertId> {
         let mesh = &self.mesh;
         let nv = mesh.num_vertices();
         let target = |i: usize| match targets {
@@ -1669,13 +1709,13 @@ impl<'v> Solver<'v> {
                 }
             }
         }
-        let mut reached = 0;
+        let mut reached = Vec::new();
         let d_b = self.d_b;
         for i in 0..n_targets {
             let v = target(i).idx();
             let g = self.gain[v];
             if g > 0.0 {
-                reached += 1;
+                reached.push(VertId(v as u32));
                 self.h[v] = add(self.h[v], scale(d_b, g));
             } else {
                 self.gain[v] = 0.0;
@@ -1930,14 +1970,17 @@ impl<'v> Solver<'v> {
         for v in verts {
             wanted[v.idx() / 64] |= 1 << (v.idx() % 64);
         }
-        for e in self.mesh.leaves() {
-            let corners = self.mesh.elem_corners(e);
-            if !corners
+        // Only the leaves of the vertices' own surfaces can have them as
+        // corners; found in parallel, summed in leaf order.
+        let mesh = &self.mesh;
+        let found = scan_patch_leaves(mesh, &patches_around(mesh, verts), |e| {
+            mesh.elem_corners(e)
                 .iter()
                 .any(|v| wanted[v.idx() / 64] & (1 << (v.idx() % 64)) != 0)
-            {
-                continue;
-            }
+                .then_some(e)
+        });
+        for e in found {
+            let corners = self.mesh.elem_corners(e);
             let c = self.mesh.elem_centroid(e);
             for &v in corners {
                 if let Ok(k) = verts.binary_search(&v) {
