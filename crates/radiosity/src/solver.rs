@@ -324,6 +324,13 @@ pub struct Solver<'v> {
     /// others): a blocker's whole surface hides what lies in its shadow.
     outline_start: Vec<u32>,
     outline: Vec<DVec3>,
+    /// Per surface, the box of its vertices and their receiver points (new
+    /// vertices lie inside it): a shot skips the surfaces whose box is
+    /// wholly behind the shooter or behind the surface's own plane.
+    surf_box: Vec<(DVec3, DVec3)>,
+    /// Per surface, its vertices (ascending), up to `indexed`.
+    surf_verts: Vec<Vec<u32>>,
+    indexed: usize,
     opts: Options,
     penumbra_size: f64,
     gradient: f64,
@@ -413,7 +420,21 @@ impl<'v> Solver<'v> {
         } else {
             (vec![0; ns + 1], Vec::new())
         };
+        let mut surf_box = vec![(DVec3::INFINITY, DVec3::NEG_INFINITY); ns];
+        let mut surf_verts = vec![Vec::new(); ns];
+        for v in 0..nv {
+            let v = VertId(v as u32);
+            let s = mesh.vertex_surface(v).idx();
+            let b = &mut surf_box[s];
+            for x in [mesh.vertex_pos(v), mesh.receiver_pos(v)] {
+                *b = (b.0.min(x), b.1.max(x));
+            }
+            surf_verts[s].push(v.0);
+        }
         Solver {
+            surf_box,
+            surf_verts,
+            indexed: nv,
             outline_start,
             outline,
             mesh,
@@ -1500,6 +1521,11 @@ impl<'v> Solver<'v> {
         self.h.resize(n, [0.0; 3]);
         self.gain.resize(n, 0.0);
         self.seen.resize(n, 0);
+        for v in self.indexed..n {
+            let s = self.mesh.vertex_surface(VertId(v as u32)).idx();
+            self.surf_verts[s].push(v as u32);
+        }
+        self.indexed = self.indexed.max(n);
     }
 
     /// Energy received by the elements from the current shot (Σ area × mean
@@ -1542,17 +1568,23 @@ impl<'v> Solver<'v> {
         surface: SurfaceId,
         normal: DVec3,
     ) -> Vec<VertId> {
+        let deltas = self.offsets(shooters);
+        // A shot at every vertex goes to those of the surfaces that may see
+        // a piece, with the vertices of patches hidden whole marked per
+        // piece; a list of new vertices is short, and all of it is tried.
+        let (all, hidden) = match targets {
+            Targets::All => self.shot_targets(shooters, &deltas, surface, normal),
+            Targets::List(_) => (Vec::new(), vec![None; shooters.len()]),
+        };
         let mesh = &self.mesh;
-        let nv = mesh.num_vertices();
         let target = |i: usize| match targets {
-            Targets::All => VertId(i as u32),
+            Targets::All => all[i],
             Targets::List(l) => l[i],
         };
         let n_targets = match targets {
-            Targets::All => nv,
+            Targets::All => all.len(),
             Targets::List(l) => l.len(),
         };
-        let deltas = self.offsets(shooters);
         // Candidates: in front of the shooter's plane and facing it.
         let candidate = |v: VertId, c: DVec3, delta: f64| {
             if mesh.vertex_surface(v) == surface {
@@ -1586,15 +1618,6 @@ impl<'v> Solver<'v> {
                 .expect("a receiver near the shooter's plane has its nudge");
             nudges[k]
         };
-        // Whole patches hidden behind one triangle (only when shooting at
-        // every vertex: a list of new vertices is short).
-        let hidden: Vec<Option<Vec<u64>>> = shooters
-            .iter()
-            .map(|(_, c)| match targets {
-                Targets::All => self.hidden_patches(*c, surface, normal),
-                Targets::List(_) => None,
-            })
-            .collect();
         let mesh = &self.mesh;
         let gain = &mut self.gain;
         let seen_flags = &mut self.seen;
@@ -1655,7 +1678,8 @@ impl<'v> Solver<'v> {
         let split = k > 1 && shooters.len() > 1;
         if split && matches!(targets, Targets::All) {
             let flags = &self.seen;
-            let spanning: Vec<ElemId> = scan_leaves(&self.mesh, |e| {
+            let around = patches_around(&self.mesh, &all);
+            let spanning: Vec<ElemId> = scan_patch_leaves(&self.mesh, &around, |e| {
                 let (mut lit, mut dark) = (false, false);
                 for &v in self.mesh.elem_corners(e) {
                     let f = flags[v.idx()];
@@ -1860,20 +1884,122 @@ impl<'v> Solver<'v> {
     /// the output, are unchanged; only the rays are saved). Vertices whose
     /// receiver point is not the vertex (on a surface's boundary) are not
     /// culled: that point may lie in a neighbouring patch.
-    fn hidden_patches(&self, c: DVec3, shooter: SurfaceId, normal: DVec3) -> Option<Vec<u64>> {
-        if !self.vis.names_blockers() {
-            return None;
-        }
+    /// For a shot at every vertex: the vertices that may receive it
+    /// (ascending), and per piece the bitmap of those hidden from its centre
+    /// by a blocker that hides their patch whole ([`Solver::hidden_patches`];
+    /// `None` when the visibility names no blockers). A surface is left out
+    /// when for every piece either its box lies wholly behind the piece's
+    /// plane (beyond the §5.4 offset) or behind the surface's own plane seen
+    /// from the piece's centre — no vertex of it is then a candidate
+    /// (`receives`) — or every patch of it is hidden whole. So a shot's cost
+    /// follows the surfaces it may light, not the model: the other floors of
+    /// a building and the rooms behind the walls are never visited.
+    fn shot_targets(
+        &self,
+        shooters: &[(Vec<DVec3>, DVec3)],
+        deltas: &[f64],
+        shooter: SurfaceId,
+        normal: DVec3,
+    ) -> (Vec<VertId>, Vec<Option<Vec<u64>>>) {
         let mesh = &self.mesh;
-        let np = mesh.num_patches();
-        // Per patch, what hides it whole: a blocker's convex surface or one
-        // triangle.
-        #[derive(Clone)]
-        enum By {
-            Outline(SurfaceId),
-            Triangle([DVec3; 3]),
+        let ns = mesh.num_surfaces();
+        let words = ns.div_ceil(64);
+        let margin = 64.0 * mesh.epsilon();
+        // Smallest and largest of n·x over a box.
+        let lowest = |n: DVec3, (lo, hi): (DVec3, DVec3)| (n * lo).min(n * hi).element_sum();
+        let highest = |n: DVec3, (lo, hi): (DVec3, DVec3)| (n * lo).max(n * hi).element_sum();
+        let mut active = vec![0u64; words];
+        let mut count = vec![0u32; ns];
+        let mut per_piece: Vec<Option<Vec<(u32, By)>>> = Vec::with_capacity(shooters.len());
+        for ((_, c), &delta) in shooters.iter().zip(deltas) {
+            let c = *c;
+            let may: Vec<u64> = (0..words)
+                .into_par_iter()
+                .map(|w| {
+                    let mut word = 0u64;
+                    for s in w * 64..(w * 64 + 64).min(ns) {
+                        let sid = SurfaceId(s as u32);
+                        if sid == shooter || self.surf_box[s].0.x > self.surf_box[s].1.x {
+                            continue;
+                        }
+                        let n = mesh.surface_normal(sid);
+                        let b = self.surf_box[s];
+                        if n.dot(c) - lowest(n, b) > -margin
+                            && highest(normal, b) - normal.dot(c) > -delta - margin
+                        {
+                            word |= 1 << (s % 64);
+                        }
+                    }
+                    word
+                })
+                .collect();
+            let hidden = self.hidden_patches(c, shooter, normal, &may);
+            let mut lit = may;
+            if let Some(h) = &hidden {
+                // Surfaces whose every patch is hidden whole: not lit by this piece.
+                let mut touched: Vec<u32> = Vec::new();
+                for (p, _) in h {
+                    let s = mesh.patch_surface(PatchId(*p)).idx();
+                    if count[s] == 0 {
+                        touched.push(s as u32);
+                    }
+                    count[s] += 1;
+                }
+                for s in touched {
+                    let s = s as usize;
+                    if count[s] as usize == mesh.surface_patches(SurfaceId(s as u32)).len() {
+                        lit[s / 64] &= !(1 << (s % 64));
+                    }
+                    count[s] = 0;
+                }
+            }
+            for (a, w) in active.iter_mut().zip(&lit) {
+                *a |= w;
+            }
+            per_piece.push(hidden);
         }
-        let hides = |by: &By, x: &[DVec3]| match by {
+        let nv = mesh.num_vertices();
+        let is_active = |s: SurfaceId| active[s.idx() / 64] & (1 << (s.idx() % 64)) != 0;
+        let bitmaps = shooters
+            .iter()
+            .zip(&per_piece)
+            .map(|((_, c), hidden)| {
+                let hidden = hidden.as_ref()?;
+                let mut bits = vec![0u64; nv.div_ceil(64)];
+                for (p, by) in hidden {
+                    let p = PatchId(*p);
+                    if !is_active(mesh.patch_surface(p)) {
+                        continue;
+                    }
+                    mesh.for_each_patch_leaf(p, |e| {
+                        for v in mesh.elem_corners(e) {
+                            // A vertex on the surface's boundary receives at a point
+                            // stepped into its surface, perhaps into a neighbouring
+                            // patch: that point itself must be hidden.
+                            if !mesh.receiver_stepped(*v)
+                                || self.hides(*c, by, &[mesh.receiver_pos(*v)])
+                            {
+                                bits[v.idx() / 64] |= 1 << (v.idx() % 64);
+                            }
+                        }
+                    });
+                }
+                Some(bits)
+            })
+            .collect();
+        let mut all: Vec<VertId> = Vec::new();
+        for s in 0..ns {
+            if is_active(SurfaceId(s as u32)) {
+                all.extend(self.surf_verts[s].iter().map(|&v| VertId(v)));
+            }
+        }
+        all.sort_unstable();
+        (all, bitmaps)
+    }
+
+    /// Whether `by` hides every point of `x` from `c`.
+    fn hides(&self, c: DVec3, by: &By, x: &[DVec3]) -> bool {
+        match by {
             By::Outline(b) => polygon_shadows(
                 c,
                 &self.outline[self.outline_start[b.idx()] as usize
@@ -1881,7 +2007,25 @@ impl<'v> Solver<'v> {
                 x,
             ),
             By::Triangle(t) => polygon_shadows(c, t, x),
-        };
+        }
+    }
+
+    /// The patches (ascending) of the surfaces in `may` (a bitmap) that a
+    /// blocker hides whole from `c`, each with its blocker; `None` when the
+    /// visibility names no blockers.
+    fn hidden_patches(
+        &self,
+        c: DVec3,
+        shooter: SurfaceId,
+        normal: DVec3,
+        may: &[u64],
+    ) -> Option<Vec<(u32, By)>> {
+        if !self.vis.names_blockers() {
+            return None;
+        }
+        let mesh = &self.mesh;
+        let np = mesh.num_patches();
+        let hides = |by: &By, x: &[DVec3]| self.hides(c, by, x);
         // What hides patch `p` whole, if anything: `last` (what hid the
         // patch before), else the blocker met toward a corner, else toward
         // the centre (coincident walls, or a patch straddling two blockers'
@@ -1889,7 +2033,7 @@ impl<'v> Solver<'v> {
         let hidden_by = |p: usize, last: Option<&By>| -> Option<By> {
             let pid = PatchId(p as u32);
             let s = mesh.patch_surface(pid);
-            if s == shooter {
+            if s == shooter || may[s.idx() / 64] & (1 << (s.idx() % 64)) == 0 {
                 return None;
             }
             // Patches are triangles and quads: no allocation per patch.
@@ -1924,37 +2068,23 @@ impl<'v> Solver<'v> {
         // Patches in runs of 64 (one surface's neighbours, mostly), each
         // first tried against what hid the one before it: a blocker ray
         // saved where the same wall hides the next patch.
-        let flags: Vec<Option<By>> = (0..np)
-            .into_par_iter()
-            .chunks(64)
-            .flat_map_iter(|run| {
-                let mut last: Option<By> = None;
-                run.into_iter()
-                    .map(|p| {
-                        let by = hidden_by(p, last.as_ref());
-                        if let Some(b) = &by {
-                            last = Some(b.clone());
+        Some(
+            (0..np)
+                .into_par_iter()
+                .chunks(64)
+                .flat_map_iter(|run| {
+                    let mut last: Option<By> = None;
+                    let mut out = Vec::new();
+                    for p in run {
+                        if let Some(by) = hidden_by(p, last.as_ref()) {
+                            last = Some(by.clone());
+                            out.push((p as u32, by));
                         }
-                        by
-                    })
-                    .collect::<Vec<_>>()
-            })
-            .collect();
-        let mut bits = vec![0u64; mesh.num_vertices().div_ceil(64)];
-        for (p, by) in flags.iter().enumerate() {
-            let Some(by) = by else { continue };
-            mesh.for_each_patch_leaf(PatchId(p as u32), |e| {
-                for v in mesh.elem_corners(e) {
-                    // A vertex on the surface's boundary receives at a point
-                    // stepped into its surface, perhaps into a neighbouring
-                    // patch: that point itself must be hidden.
-                    if !mesh.receiver_stepped(*v) || hides(by, &[mesh.receiver_pos(*v)]) {
-                        bits[v.idx() / 64] |= 1 << (v.idx() % 64);
                     }
-                }
-            });
-        }
-        Some(bits)
+                    out
+                })
+                .collect(),
+        )
     }
 
     /// For each of the given vertices (sorted, distinct), the unit direction
@@ -2348,6 +2478,14 @@ fn convex_outline(mesh: &Mesh, s: SurfaceId, patches: &[PatchId]) -> Option<Vec<
     (k >= 3 && !(left && right) && (turning - std::f64::consts::TAU).abs() < 1e-6).then_some(poly)
 }
 
+/// What hides a patch whole from a shooter's centre: a blocker's convex
+/// surface (its outline), or one triangle.
+#[derive(Clone)]
+enum By {
+    Outline(SurfaceId),
+    Triangle([DVec3; 3]),
+}
+
 /// Whether the convex polygon `o` (a surface's outline, or one blocker
 /// triangle) hides every point of `x` from `c`: each strictly beyond its
 /// plane and seen through its interior, 1e-7 of its size inside the
@@ -2453,10 +2591,12 @@ mod tests {
         assert!(!polygon_shadows(c, rect, &square(2.0, 1.5, 0.0, 0.5)));
     }
 
-    /// Every vertex of a patch found hidden behind one triangle is occluded
-    /// by the ray caster too (the culling never changes an answer), and the
-    /// culling finds something: two rooms with a wall between them (no
-    /// door), a box and a lamp in the first.
+    /// Every vertex a shot at every vertex rules out without a ray — its
+    /// patch hidden whole behind a blocker, or its surface left out (behind
+    /// the shooter, facing away, or hidden whole) although it would be a
+    /// candidate — is occluded by the ray caster too (the culling never
+    /// changes an answer), and the culling finds something: two rooms with
+    /// a wall between them (no door), a box and a lamp in the first.
     #[test]
     fn hidden_patches_are_occluded_and_found() {
         let src = "c_rgb g 0.5 0.5 0.5;
@@ -2488,16 +2628,21 @@ mod tests {
             DVec3::new(1.7, 1.6, 2.98),
             DVec3::new(2.4, 2.3, 2.98),
         ] {
-            let bits = solver
-                .hidden_patches(c, s, m.surface_normal(s))
-                .expect("the ray caster names blockers");
+            let n = m.surface_normal(s);
+            let delta = 1e-3;
+            let (all, bitmaps) = solver.shot_targets(&[(Vec::new(), c)], &[delta], s, n);
+            let bits = bitmaps[0].as_ref().expect("the ray caster names blockers");
             for v in 0..m.num_vertices() {
                 let vid = VertId(v as u32);
-                if bits[v / 64] & (1 << (v % 64)) != 0 {
+                let x = m.receiver_pos(vid);
+                let candidate =
+                    m.vertex_surface(vid) != s && receives(x, m.vertex_normal(vid), c, n, delta);
+                let left_out = all.binary_search(&vid).is_err();
+                if left_out && candidate || bits[v / 64] & (1 << (v % 64)) != 0 {
                     hidden += 1;
                     assert!(
-                        !vis.clear(c, m.receiver_pos(vid), s, m.vertex_surface(vid)),
-                        "vertex {v} at {} marked hidden from {c} but visible",
+                        !vis.clear(c, x, s, m.vertex_surface(vid)),
+                        "vertex {v} at {} ruled out from {c} but visible",
                         m.vertex_pos(vid)
                     );
                 }
