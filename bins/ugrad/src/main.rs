@@ -126,6 +126,12 @@ struct Args {
     /// ray caster is faster).
     #[arg(long, value_enum, default_value = "auto")]
     visibility: VisibilityKind,
+    /// With ray visibility, a shot at many vertices first rules out those
+    /// hidden behind one big convex occluder (a wall, a floor, a patch of
+    /// them) with a conservative occlusion cube of N × N cells a face around
+    /// the shooter: the answers are the rays', only rays are saved (0: off).
+    #[arg(long, default_value_t = 128, value_name = "N")]
+    cull_res: usize,
     /// Hemi-cube resolution: pixels across its top face (a multiple of 64).
     #[arg(long, default_value_t = 512, value_name = "N", value_parser = hemicube_res)]
     hemicube_res: u32,
@@ -318,6 +324,7 @@ fn main() -> std::process::ExitCode {
             tail_rays: args.tail_rays,
             tail_refine: args.tail_refine,
             regather: !args.no_regather,
+            cull_res: args.cull_res,
             penumbra_split: args.penumbra_split.max(1),
             ..radiosity::Options::default()
         };

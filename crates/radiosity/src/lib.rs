@@ -8,6 +8,7 @@
 //! ΔB·F(v), F the exact point-to-polygon form factor of the shooting
 //! element, clipped to v's horizon.
 
+mod cube;
 pub mod formfactor;
 pub mod solver;
 mod tail;
