@@ -443,7 +443,11 @@ pub fn slab_entry(lo: DVec3, hi: DVec3, o: DVec3, inv: DVec3, tmin: f64, tmax: f
         tn = tn.max(a.min(b));
         // (Widened either side of 0; ±∞, from a ray parallel to the slab,
         // stays as it is.)
-        tf = tf.min(if far > 0.0 { far * SLAB_FAR } else { far / SLAB_FAR });
+        tf = tf.min(if far > 0.0 {
+            far * SLAB_FAR
+        } else {
+            far / SLAB_FAR
+        });
     }
     (tn <= tf).then_some(tn)
 }
