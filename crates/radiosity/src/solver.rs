@@ -361,6 +361,11 @@ pub struct Solver<'v> {
     /// Per patch, Σ over its leaves of area × ρ × the two: what
     /// [`Solver::patch_energy`] adds to the corners' trapezoid rule.
     pcorr: Vec<Rgb>,
+    /// Per patch, the channel sum of [`Solver::unshot`] as of the end of the
+    /// last shot; `None` until the first and after the tail (which changes
+    /// every patch). A shot changes only the patches of the surfaces it
+    /// reached and of its own: the rest are not walked again.
+    unshot_cache: Option<Vec<f64>>,
 }
 
 /// A shot as shot: its pieces, surface, normal and unshot radiosity.
@@ -467,6 +472,7 @@ impl<'v> Solver<'v> {
             qexact: Vec::new(),
             qmean: Default::default(),
             pcorr: vec![[0.0; 3]; np],
+            unshot_cache: None,
         }
     }
 
@@ -541,6 +547,35 @@ impl<'v> Solver<'v> {
         u.iter().sum::<f64>() / self.emitted
     }
 
+    /// [`Solver::unshot_fraction`] after a shot that reached `lit` from
+    /// surface `shooter`, recomputing only the patches it can have changed
+    /// (the same bits: the sum runs over every patch in order).
+    fn unshot_after_shot(&mut self, lit: &[VertId], shooter: SurfaceId) -> f64 {
+        if self.emitted <= 0.0 {
+            return 0.0;
+        }
+        let cache = match self.unshot_cache.take() {
+            Some(mut c) => {
+                let mut dirty = patches_around(&self.mesh, lit);
+                dirty.extend_from_slice(self.mesh.surface_patches(shooter));
+                dirty.sort_unstable();
+                dirty.dedup();
+                let u: Vec<f64> = dirty.par_iter().map(|&p| sum(self.unshot(p))).collect();
+                for (p, u) in dirty.into_iter().zip(u) {
+                    c[p.idx()] = u;
+                }
+                c
+            }
+            None => (0..self.mesh.num_patches())
+                .into_par_iter()
+                .map(|p| sum(self.unshot(PatchId(p as u32))))
+                .collect(),
+        };
+        let f = cache.iter().sum::<f64>() / self.emitted;
+        self.unshot_cache = Some(cache);
+        f
+    }
+
     /// Runs until a stopping rule holds; `progress` is called after every shot.
     pub fn solve(
         &mut self,
@@ -554,10 +589,13 @@ impl<'v> Solver<'v> {
         loop {
             // §5.2: the brightest patches, re-evaluated just before each shot.
             let np = self.mesh.num_patches();
-            let mut energies: Vec<(f64, u32)> = (0..np)
-                .into_par_iter()
-                .map(|p| (sum(self.unshot(PatchId(p as u32))), p as u32))
-                .collect();
+            let mut energies: Vec<(f64, u32)> = match &self.unshot_cache {
+                Some(c) => c.iter().enumerate().map(|(p, &u)| (u, p as u32)).collect(),
+                None => (0..np)
+                    .into_par_iter()
+                    .map(|p| (sum(self.unshot(PatchId(p as u32))), p as u32))
+                    .collect(),
+            };
             let total: f64 = energies.iter().map(|e| e.0).sum();
             if total <= self.opts.converge * self.emitted {
                 return Stop::Converged;
@@ -769,7 +807,7 @@ impl<'v> Solver<'v> {
 
         let (received, reflected) = self.received(&lit);
         let (received, reflected) = (received + quad.0, reflected + quad.1);
-        let unshot = self.unshot_fraction();
+        let unshot = self.unshot_after_shot(&lit, surface);
         let stats = ShotStats {
             shot: self.shots.len() + 1,
             patch: p.0,
@@ -804,6 +842,7 @@ impl<'v> Solver<'v> {
         interrupt: Option<Arc<AtomicBool>>,
         deadline: Option<Instant>,
     ) -> TailEnd {
+        self.unshot_cache = None;
         let t0 = Instant::now();
         let np = self.mesh.num_patches();
         let stopped = |i: &Option<Arc<AtomicBool>>| {
