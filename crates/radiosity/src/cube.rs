@@ -292,6 +292,73 @@ impl OcclusionCube {
         }
     }
 
+    /// Whether every point of the box [lo, hi] is hidden ([`Self::hides`]):
+    /// every cell its projection may touch is covered, and every corner of
+    /// the box lies beyond that cell's occluder by the margin (the tests
+    /// are linear in the point, so the corners decide for the whole box).
+    pub fn hides_box(&self, lo: DVec3, hi: DVec3) -> bool {
+        let corners: Vec<DVec3> = (0..8)
+            .map(|i| {
+                DVec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                ) - self.c
+            })
+            .collect();
+        let res = self.res as f64;
+        for face in 0..6 {
+            let (a, s, iu, iv) = frame(face);
+            let z: Vec<f64> = corners.iter().map(|d| s * d[a]).collect();
+            // No point of the box in this face's pyramid (z ≥ |u|, z ≥ |v|,
+            // each two linear conditions, all false at every corner of the
+            // box for one of them): its directions are on other faces.
+            let outside = [(iu, 1.0), (iu, -1.0), (iv, 1.0), (iv, -1.0)]
+                .iter()
+                .any(|&(i, sg)| corners.iter().zip(&z).all(|(d, &z)| z - sg * d[i] < 0.0));
+            if outside || z.iter().all(|&z| z <= 0.0) {
+                continue;
+            }
+            // The cells the box may show in: its corners' projected box, or
+            // the whole face when a corner lies behind the face's plane.
+            let (mut i0, mut i1, mut j0, mut j1) = (0, self.res - 1, 0, self.res - 1);
+            if z.iter().all(|&z| z > 0.0) {
+                let cell =
+                    |x: f64| (((x + 1.0) * 0.5 * res).floor()).clamp(0.0, res - 1.0) as usize;
+                let us = corners.iter().zip(&z).map(|(d, &z)| d[iu] / z);
+                let vs = corners.iter().zip(&z).map(|(d, &z)| d[iv] / z);
+                let (ulo, uhi) = us.fold((f64::MAX, f64::MIN), |(l, h), u| (l.min(u), h.max(u)));
+                let (vlo, vhi) = vs.fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(v), h.max(v)));
+                if ulo > 1.0 || uhi < -1.0 || vlo > 1.0 || vhi < -1.0 {
+                    continue;
+                }
+                (i0, i1, j0, j1) = (cell(ulo), cell(uhi), cell(vlo), cell(vhi));
+            }
+            let mut last = u32::MAX;
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    let cell = self.faces[face][j * self.res + i];
+                    if !cell.far.is_finite() {
+                        return false;
+                    }
+                    if cell.occluder == last {
+                        continue;
+                    }
+                    let (n, k) = self.planes[cell.occluder as usize];
+                    let beyond = corners.iter().all(|&d| {
+                        let h = n.dot(d);
+                        h * k > 0.0 && (h.abs() - k.abs()) > self.margin && k / h > NEAR_MARGIN
+                    });
+                    if !beyond {
+                        return false;
+                    }
+                    last = cell.occluder;
+                }
+            }
+        }
+        true
+    }
+
     /// Whether the segment from the centre to `p` surely crosses an
     /// occluder drawn: its direction falls in a cell the occluder covers,
     /// and `p` lies beyond the occluder's plane by more than the margin
@@ -353,6 +420,12 @@ mod tests {
         assert!(!cube.hides(DVec3::new(2.0, 0.1, 0.2)));
         assert!(!cube.hides(DVec3::new(3.0, 2.0, 0.0)));
         assert!(!cube.hides(DVec3::new(-3.0, 0.0, 0.0)));
+        // A box wholly behind the wall, one reaching past its edge, one
+        // straddling its plane, one behind the centre.
+        assert!(cube.hides_box(DVec3::new(3.0, -0.5, -0.5), DVec3::new(4.0, 0.5, 0.5)));
+        assert!(!cube.hides_box(DVec3::new(3.0, -0.5, -0.5), DVec3::new(4.0, 2.5, 0.5)));
+        assert!(!cube.hides_box(DVec3::new(1.5, -0.2, -0.2), DVec3::new(3.0, 0.2, 0.2)));
+        assert!(!cube.hides_box(DVec3::new(-4.0, -0.5, -0.5), DVec3::new(-3.0, 0.5, 0.5)));
     }
 
     /// Against exact segment–polygon tests: random convex occluders around
@@ -405,6 +478,16 @@ mod tests {
                 if cube.hides(p) {
                     hidden += 1;
                     assert!(crosses, "{p} hidden from {c} but its segment is clear");
+                }
+                // A small box around the point: hidden whole only if the
+                // point is.
+                let r = DVec3::splat(0.05);
+                if cube.hides_box(p - r, p + r) {
+                    assert!(cube.hides(p), "a box around {p} hidden, not the point");
+                    assert!(
+                        crosses,
+                        "a box around {p} hidden from {c}, its segment clear"
+                    );
                 }
                 behind += usize::from(crosses);
             }

@@ -2035,6 +2035,40 @@ impl<'v> Solver<'v> {
                 per_piece.push(hidden);
             }
         }
+        // With the cube: the surfaces whose whole box it hides from a piece
+        // are not lit by that piece.
+        let cubes: Vec<OcclusionCube> = if cull {
+            shooters
+                .iter()
+                .zip(&mays)
+                .map(|((_, c), may)| self.occlusion_cube(*c, may))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        if cull {
+            active.fill(0);
+            for (may, cube) in mays.iter().zip(&cubes) {
+                let lit: Vec<u64> = (0..words)
+                    .into_par_iter()
+                    .map(|w| {
+                        let (mut word, mut m) = (may[w], may[w]);
+                        while m != 0 {
+                            let b = m.trailing_zeros();
+                            m &= m - 1;
+                            let (lo, hi) = self.surf_box[w * 64 + b as usize];
+                            if cube.hides_box(lo, hi) {
+                                word &= !(1 << b);
+                            }
+                        }
+                        word
+                    })
+                    .collect();
+                for (a, w) in active.iter_mut().zip(&lit) {
+                    *a |= w;
+                }
+            }
+        }
         let mut all: Vec<VertId> = Vec::new();
         for s in 0..ns {
             if bit(&active, s) {
@@ -2052,7 +2086,7 @@ impl<'v> Solver<'v> {
             .map(|(k, (_, c))| {
                 let mut bits = vec![0u64; nv.div_ceil(64)];
                 if cull {
-                    let cube = self.occlusion_cube(*c, &mays[k]);
+                    let cube = &cubes[k];
                     let behind: Vec<bool> = all
                         .par_iter()
                         .map(|&v| cube.hides(mesh.receiver_pos(v)))
