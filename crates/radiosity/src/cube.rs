@@ -297,19 +297,18 @@ impl OcclusionCube {
     /// the box lies beyond that cell's occluder by the margin (the tests
     /// are linear in the point, so the corners decide for the whole box).
     pub fn hides_box(&self, lo: DVec3, hi: DVec3) -> bool {
-        let corners: Vec<DVec3> = (0..8)
-            .map(|i| {
-                DVec3::new(
-                    if i & 1 == 0 { lo.x } else { hi.x },
-                    if i & 2 == 0 { lo.y } else { hi.y },
-                    if i & 4 == 0 { lo.z } else { hi.z },
-                ) - self.c
-            })
-            .collect();
+        // (Arrays: this runs for every surface in front of every shot.)
+        let corners: [DVec3; 8] = std::array::from_fn(|i| {
+            DVec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            ) - self.c
+        });
         let res = self.res as f64;
         for face in 0..6 {
             let (a, s, iu, iv) = frame(face);
-            let z: Vec<f64> = corners.iter().map(|d| s * d[a]).collect();
+            let z: [f64; 8] = corners.map(|d| s * d[a]);
             // No point of the box in this face's pyramid (z ≥ |u|, z ≥ |v|,
             // each two linear conditions, all false at every corner of the
             // box for one of them): its directions are on other faces.
@@ -344,12 +343,7 @@ impl OcclusionCube {
                     if cell.occluder == last {
                         continue;
                     }
-                    let (n, k) = self.planes[cell.occluder as usize];
-                    let beyond = corners.iter().all(|&d| {
-                        let h = n.dot(d);
-                        h * k > 0.0 && (h.abs() - k.abs()) > self.margin && k / h > NEAR_MARGIN
-                    });
-                    if !beyond {
+                    if !corners.iter().all(|&d| self.beyond(cell.occluder, d)) {
                         return false;
                     }
                     last = cell.occluder;
@@ -378,10 +372,15 @@ impl OcclusionCube {
         if !cell.far.is_finite() {
             return false;
         }
-        let (n, k) = self.planes[cell.occluder as usize];
+        self.beyond(cell.occluder, d)
+    }
+
+    /// Whether the point at `d` from the centre lies beyond occluder `occ`'s
+    /// plane by the margin, the segment to it meeting the plane at
+    /// t = k / h beyond its start.
+    fn beyond(&self, occ: u32, d: DVec3) -> bool {
+        let (n, k) = self.planes[occ as usize];
         let h = n.dot(d);
-        // The segment meets the plane at t = k / h: beyond the start, and p
-        // beyond the plane by the margin.
         h * k > 0.0 && (h.abs() - k.abs()) > self.margin && k / h > NEAR_MARGIN
     }
 
