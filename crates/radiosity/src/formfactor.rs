@@ -77,6 +77,101 @@ pub fn point_to_polygon(x: DVec3, n: DVec3, poly: &[DVec3]) -> f64 {
     contour_integral(x, n, &clipped)
 }
 
+/// A convex cell of a shooter (a triangle, or a quad with `pts[3]` set) and
+/// its radiosity at each corner, relative to the shooter's mean; the
+/// radiosity varies linearly over a triangle, bilinearly over a quad.
+#[derive(Clone, Copy, Debug)]
+pub struct Cell {
+    pub pts: [DVec3; 4],
+    pub s: [f32; 4],
+    pub n: u8,
+}
+
+impl Cell {
+    fn centroid(&self) -> DVec3 {
+        let k = self.n as usize;
+        self.pts[..k].iter().copied().sum::<DVec3>() / k as f64
+    }
+    fn mean(&self) -> f64 {
+        let k = self.n as usize;
+        self.s[..k].iter().map(|&v| f64::from(v)).sum::<f64>() / k as f64
+    }
+    fn diameter2(&self) -> f64 {
+        let k = self.n as usize;
+        let mut d: f64 = 0.0;
+        for i in 0..k {
+            for j in i + 1..k {
+                d = d.max(self.pts[i].distance_squared(self.pts[j]));
+            }
+        }
+        d
+    }
+    /// The four children by the edges' midpoints (and the centre of a quad).
+    fn children(&self) -> [Cell; 4] {
+        let (p, s) = (&self.pts, &self.s);
+        let mp = |i: usize, j: usize| ((p[i] + p[j]) * 0.5, (s[i] + s[j]) * 0.5);
+        if self.n == 3 {
+            let (a, sa) = mp(0, 1);
+            let (b, sb) = mp(1, 2);
+            let (c, sc) = mp(2, 0);
+            let tri = |q: [DVec3; 3], v: [f32; 3]| Cell {
+                pts: [q[0], q[1], q[2], q[2]],
+                s: [v[0], v[1], v[2], v[2]],
+                n: 3,
+            };
+            [
+                tri([p[0], a, c], [s[0], sa, sc]),
+                tri([a, p[1], b], [sa, s[1], sb]),
+                tri([c, b, p[2]], [sc, sb, s[2]]),
+                tri([a, b, c], [sa, sb, sc]),
+            ]
+        } else {
+            let (e0, s0) = mp(0, 1);
+            let (e1, s1) = mp(1, 2);
+            let (e2, s2) = mp(2, 3);
+            let (e3, s3) = mp(3, 0);
+            let m = (p[0] + p[1] + p[2] + p[3]) * 0.25;
+            let sm = (s[0] + s[1] + s[2] + s[3]) * 0.25;
+            let quad = |q: [DVec3; 4], v: [f32; 4]| Cell { pts: q, s: v, n: 4 };
+            [
+                quad([p[0], e0, m, e3], [s[0], s0, sm, s3]),
+                quad([e0, p[1], e1, m], [s0, s[1], s1, sm]),
+                quad([m, e1, p[2], e2], [sm, s1, s[2], s2]),
+                quad([e3, m, e2, p[3]], [s3, sm, s2, s[3]]),
+            ]
+        }
+    }
+}
+
+/// The form factor from `x` (unit normal `n`) to a shooter whose radiosity
+/// varies over it, weighted by that radiosity: ∫ s(y) dF(y), `s` given
+/// relative to the shooter's mean over `cells`, which tile it. Near `x` the
+/// light of the cells' parts closest to it dominates (a point on a
+/// concave junction sees the adjacent face's light at the junction line
+/// over half its hemisphere, whatever the face's size), so a cell larger
+/// than half its distance from `x` is cut in four, at most `depth` times,
+/// and each part is taken at its mean. Far from `x` this is the mean
+/// radiosity times the form factor.
+pub fn shaped_form_factor(x: DVec3, n: DVec3, cells: &[Cell], depth: u32) -> f64 {
+    fn one(x: DVec3, n: DVec3, c: &Cell, depth: u32, buf: &mut Vec<DVec3>) -> f64 {
+        if depth > 0 && c.diameter2() > 0.25 * c.centroid().distance_squared(x) {
+            return c
+                .children()
+                .iter()
+                .map(|k| one(x, n, k, depth - 1, buf))
+                .sum();
+        }
+        let m = c.mean();
+        if m == 0.0 {
+            return 0.0;
+        }
+        clip_to_front(&c.pts[..c.n as usize], x, n, buf);
+        m * contour_integral(x, n, buf)
+    }
+    let mut buf = Vec::with_capacity(6);
+    cells.iter().map(|c| one(x, n, c, depth, &mut buf)).sum()
+}
+
 /// The contour integral itself, without clipping (the polygon must lie in the
 /// receiver's front half-space).
 pub fn contour_integral(x: DVec3, n: DVec3, poly: &[DVec3]) -> f64 {
@@ -204,5 +299,57 @@ mod tests {
         ];
         let total: f64 = faces.iter().map(|f| point_to_polygon(x, DVec3::Z, f)).sum();
         assert!((total - 1.0).abs() < 1e-12, "{total}");
+    }
+
+    #[test]
+    fn shaped_form_factor_weighs_the_light_where_it_is() {
+        let sq = square(1.0);
+        let cell = |s: [f32; 4]| Cell {
+            pts: [sq[0], sq[1], sq[2], sq[3]],
+            s,
+            n: 4,
+        };
+        // Uniform: the plain form factor (a cell far enough not to be cut).
+        let x = DVec3::new(0.5, 0.5, -20.0);
+        let f = point_to_polygon(x, DVec3::Z, &sq);
+        let g = shaped_form_factor(x, DVec3::Z, &[cell([1.0; 4])], 8);
+        assert!(rel(g, f) < 1e-12, "{g} {f}");
+        // Near: cut, and still the plain form factor when uniform.
+        let x = DVec3::new(0.2, 0.3, 0.9);
+        let f = point_to_polygon(x, DVec3::Z, &sq);
+        let g = shaped_form_factor(x, DVec3::Z, &[cell([1.0; 4])], 8);
+        assert!(rel(g, f) < 1e-9, "{g} {f}");
+        // A point on the junction of a perpendicular face sees the light at
+        // the junction: the face's radiosity rises from 0.2 at the junction
+        // (x = 0) to 1.8 at x = 1, mean 1; the point at the junction's middle,
+        // facing up, a hair above the face's plane.
+        let floor = [
+            DVec3::new(0., -0.5, 0.),
+            DVec3::new(1., -0.5, 0.),
+            DVec3::new(1., 0.5, 0.),
+            DVec3::new(0., 0.5, 0.),
+        ];
+        let c = Cell {
+            pts: floor,
+            s: [0.2, 1.8, 1.8, 0.2],
+            n: 4,
+        };
+        let x = DVec3::new(0.0, 0.0, 1e-7);
+        let uniform = point_to_polygon(x, DVec3::X, &floor);
+        let shaped = shaped_form_factor(x, DVec3::X, &[c], 24);
+        // Nearly all the face's form factor lies next to the point, where
+        // the radiosity is 0.2.
+        assert!((shaped / uniform - 0.2).abs() < 0.01, "{shaped} {uniform}");
+        // A triangle's cut keeps the integral of a linear field: by the
+        // centroid rule for a far point.
+        let t = Cell {
+            pts: [sq[0], sq[1], sq[2], sq[2]],
+            s: [0.0, 1.0, 2.0, 2.0],
+            n: 3,
+        };
+        let x = DVec3::new(0.6, 0.3, -0.05);
+        let g = shaped_form_factor(x, DVec3::Z, &[t], 12);
+        let f = point_to_polygon(x, DVec3::Z, &sq[..3]);
+        assert!(g > 0.0 && g < 2.0 * f, "{g} {f}");
     }
 }

@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use ug::{Item, Material, MaterialDef, MaterialId, Model};
 
 use crate::cube::OcclusionCube;
-use crate::formfactor::{offset_receiver, point_to_polygon, receives};
+use crate::formfactor::{Cell, offset_receiver, point_to_polygon, receives, shaped_form_factor};
 use crate::visibility::Visibility;
 
 type Rgb = [f64; 3];
@@ -199,6 +199,9 @@ pub struct Options {
     /// the ray caster's; only rays are saved.
     pub cull_res: usize,
     pub cull_targets: usize,
+    /// A shooter's light is shared among its pieces, and over each piece
+    /// near a receiver, as its radiosity is (instead of uniformly).
+    pub shape: bool,
 }
 
 impl Default for Options {
@@ -223,6 +226,7 @@ impl Default for Options {
             regather: true,
             cull_res: 128,
             cull_targets: 20_000,
+            shape: false,
         }
     }
 }
@@ -366,11 +370,65 @@ pub struct Solver<'v> {
     /// every patch). A shot changes only the patches of the surfaces it
     /// reached and of its own: the rest are not walked again.
     unshot_cache: Option<Vec<f64>>,
+    /// Per element (by id), the radiosity (channel sum) its patch had shot
+    /// at each of its corners: their radiosity when the patch last shot
+    /// (children inherit it, interpolated). What a patch has not shot yet is
+    /// the rest, and so is the shape its next shot shares its light by.
+    /// Empty unless `shape`.
+    leaf_shot: Vec<[f32; 4]>,
+}
+
+/// A piece of a shooter: its polygon, centre, and its radiosity as a
+/// multiple of the shooter's mean (the form factors to it are scaled by it).
+#[derive(Clone)]
+struct Piece {
+    poly: Vec<DVec3>,
+    c: DVec3,
+    w: f64,
+    /// Longest edge.
+    size: f64,
+    /// Where the piece's radiosity is not uniform, its leaves (at most
+    /// [`SHAPE_CELLS`]) with their corners' radiosity relative to the
+    /// shooter's mean: receivers nearer than [`NEAR`] sizes take the form
+    /// factor weighted by it ([`shaped_form_factor`]).
+    cells: Option<Vec<Cell>>,
+}
+
+/// What the tail needs to shape its first bounce near each patch (see
+/// `tail::Near`): the radiosity at its start (channel sums by vertex), each
+/// patch's mean unshot radiosity then, and the first bounce per patch.
+struct TailShape {
+    snap: Vec<f32>,
+    ubar: Vec<f64>,
+    first: Vec<Rgb>,
+}
+
+/// At most this many cells describe a piece's radiosity (a piece with more
+/// leaves is described by its elements at the deepest level within it).
+const SHAPE_CELLS: usize = 256;
+/// Receivers nearer a piece's centre than this many times its size take its
+/// light weighted by its radiosity's shape.
+const NEAR: f64 = 2.0;
+/// How many times a cell near a receiver may be cut in four.
+const SHAPE_DEPTH: u32 = 10;
+
+impl Piece {
+    /// The form factor from `x` (normal `n`) to the piece, weighted by its
+    /// radiosity relative to the shooter's mean.
+    #[inline]
+    fn ff(&self, x: DVec3, n: DVec3) -> f64 {
+        match &self.cells {
+            Some(cells) if x.distance_squared(self.c) < (NEAR * self.size).powi(2) => {
+                shaped_form_factor(x, n, cells, SHAPE_DEPTH)
+            }
+            _ => self.w * point_to_polygon(x, n, &self.poly),
+        }
+    }
 }
 
 /// A shot as shot: its pieces, surface, normal and unshot radiosity.
 struct Past {
-    shooters: Vec<(Vec<DVec3>, DVec3)>,
+    shooters: Vec<Piece>,
     surface: SurfaceId,
     normal: DVec3,
     d_b: Rgb,
@@ -472,6 +530,7 @@ impl<'v> Solver<'v> {
             qexact: Vec::new(),
             qmean: Default::default(),
             pcorr: vec![[0.0; 3]; np],
+            leaf_shot: Vec::new(),
             unshot_cache: None,
         }
     }
@@ -521,6 +580,59 @@ impl<'v> Solver<'v> {
             acc = add(acc, scale(b, self.mesh.elem_area(e) / c.len() as f64));
         });
         acc
+    }
+
+    /// Records that patch `p` has shot all its light: each leaf's
+    /// [`Solver::leaf_shot`] becomes the mean of its corners' radiosity.
+    fn mark_shot(&mut self, p: PatchId) {
+        self.leaf_shot.resize(self.mesh.num_elements(), [0.0; 4]);
+        let mut leaves = Vec::new();
+        self.mesh.for_each_patch_leaf(p, |e| leaves.push(e));
+        for e in leaves {
+            let mut out = [0.0; 4];
+            for (k, &v) in self.mesh.elem_corners(e).iter().enumerate() {
+                out[k] = sum(self.radiosity(v)) as f32;
+            }
+            self.leaf_shot[e.idx()] = out;
+        }
+    }
+
+    /// What leaf `e` has not shot yet at its corner `v` (channel sum, ≥ 0).
+    #[inline]
+    fn unshot_at(&self, e: ElemId, v: VertId) -> f64 {
+        let s = match self.leaf_shot.get(e.idx()) {
+            Some(s) => {
+                let k = self.mesh.elem_corners(e).iter().position(|&x| x == v);
+                k.map_or(0.0, |k| s[k])
+            }
+            None => 0.0,
+        };
+        (sum(self.radiosity(v)) - f64::from(s)).max(0.0)
+    }
+
+    /// The mean unshot radiosity over an element (channel sum): the
+    /// trapezoid rule over its leaves.
+    fn elem_mean_unshot(&self, e: ElemId) -> f64 {
+        let (mut acc, mut a) = (0.0, 0.0);
+        let mut stack = vec![e];
+        while let Some(e) = stack.pop() {
+            if let Some(children) = self.mesh.elem_children(e) {
+                stack.extend(children.iter().copied());
+                continue;
+            }
+            let c = self.mesh.elem_corners(e);
+            let b: f64 = c.iter().map(|&v| self.unshot_at(e, v)).sum();
+            let ea = self.mesh.elem_area(e);
+            acc += ea * b / c.len() as f64;
+            a += ea;
+        }
+        if a > 0.0 { acc / a } else { 0.0 }
+    }
+
+    /// The cells describing the unshot radiosity over element `e` relative
+    /// to `mean` (see [`Piece::cells`]); `None` where it is uniform.
+    fn piece_cells(&self, e: ElemId, mean: f64, w: f64) -> Option<Vec<Cell>> {
+        cells_of(&self.mesh, e, |l, v| self.unshot_at(l, v), mean, w)
     }
 
     /// Energy a patch has not shot yet (per channel, never negative).
@@ -694,9 +806,19 @@ impl<'v> Solver<'v> {
             }
             elems.push(e);
         }
-        let shooters: Vec<(Vec<DVec3>, DVec3)> = elems
+        // Each piece shoots its own share of the patch's light: its mean
+        // radiosity over the patch's (channel sums, over its leaves).
+        let means: Vec<f64> = elems.iter().map(|&e| self.elem_mean_unshot(e)).collect();
+        let mean = elems
+            .iter()
+            .zip(&means)
+            .map(|(&e, m)| self.mesh.elem_area(e) * m)
+            .sum::<f64>()
+            / area;
+        let shooters: Vec<Piece> = elems
             .into_iter()
-            .map(|e| {
+            .zip(means)
+            .map(|(e, m)| {
                 let poly: Vec<DVec3> = self
                     .mesh
                     .elem_corners(e)
@@ -704,7 +826,27 @@ impl<'v> Solver<'v> {
                     .map(|&v| self.mesh.vertex_pos(v))
                     .collect();
                 let c = poly.iter().copied().sum::<DVec3>() / poly.len() as f64;
-                (poly, c)
+                let size = (0..poly.len())
+                    .map(|i| (poly[(i + 1) % poly.len()] - poly[i]).length())
+                    .fold(0.0, f64::max);
+                if mean <= 0.0 || !self.opts.shape {
+                    return Piece {
+                        poly,
+                        c,
+                        w: 1.0,
+                        size,
+                        cells: None,
+                    };
+                }
+                let w = m / mean;
+                let cells = self.piece_cells(e, mean, w);
+                Piece {
+                    poly,
+                    c,
+                    w,
+                    size,
+                    cells,
+                }
             })
             .collect();
         let surface = self.mesh.patch_surface(p);
@@ -715,6 +857,9 @@ impl<'v> Solver<'v> {
         let mut lit = self.shoot_at(Targets::All, &shooters, surface, normal);
         let reached = lit.len();
         self.shot[p.idx()] = add(self.shot[p.idx()], d_phi);
+        if self.opts.shape {
+            self.mark_shot(p);
+        }
 
         // §6: gradient subdivision, re-shooting this light at the new vertices.
         let mut subdivided = 0;
@@ -885,10 +1030,25 @@ impl<'v> Solver<'v> {
             .into_par_iter()
             .map(|p| scale(self.unshot(PatchId(p as u32)), 1.0 / area[p]))
             .collect();
+        let emitted = self.emitted;
         let fraction =
-            |u: &[Rgb]| u.iter().zip(&area).map(|(b, a)| sum(*b) * a).sum::<f64>() / self.emitted;
+            |u: &[Rgb]| u.iter().zip(&area).map(|(b, a)| sum(*b) * a).sum::<f64>() / emitted;
         let before = fraction(&u);
         let mut remaining = before;
+        let tshape = self.opts.shape.then(|| {
+            let nv = self.mesh.num_vertices();
+            self.leaf_shot.resize(self.mesh.num_elements(), [0.0; 4]);
+            TailShape {
+                snap: (0..nv)
+                    .map(|v| sum(self.radiosity(VertId(v as u32))) as f32)
+                    .collect(),
+                ubar: (0..np)
+                    .into_par_iter()
+                    .map(|p| self.elem_mean_unshot(self.mesh.patch_root(PatchId(p as u32))))
+                    .collect(),
+                first: u.clone(),
+            }
+        });
         // Radiosity each patch has shot during the tail, and the irradiance
         // its centre has received.
         let mut shot_b = vec![[0.0; 3]; np];
@@ -904,7 +1064,28 @@ impl<'v> Solver<'v> {
             if cancel() {
                 break TailEnd::Stopped(stopped(&interrupt));
             }
-            let dh = tr.gather(&u);
+            let mut dh = tr.gather(&u);
+            if iterations == 0
+                && let Some(t) = &tshape
+            {
+                let mesh = &self.mesh;
+                let leaf_shot = &self.leaf_shot;
+                let ff = |p: u32, x: DVec3, n: DVec3| {
+                    let cells =
+                        tail_cells(mesh, leaf_shot, &t.snap, PatchId(p), t.ubar[p as usize])?;
+                    Some(shaped_form_factor(x, n, &cells, SHAPE_DEPTH))
+                };
+                let near = crate::tail::Near {
+                    ff: &ff,
+                    first: &t.first,
+                };
+                let corr = tr.first_bounce_correction(&near);
+                for (h, c) in dh.iter_mut().zip(corr) {
+                    for k in 0..3 {
+                        h[k] = (h[k] + c[k]).max(0.0);
+                    }
+                }
+            }
             for (s, b) in shot_b.iter_mut().zip(&u) {
                 *s = add(*s, *b);
             }
@@ -924,7 +1105,21 @@ impl<'v> Solver<'v> {
         // The picture: every patch corner gathers once what the patches shot.
         let t2 = Instant::now();
         tr.compact_rows();
-        let Some((recv, total)) = tr.corners(&self.mesh, &shot_b, &cancel) else {
+        let corners = {
+            let mesh = &self.mesh;
+            let leaf_shot = &self.leaf_shot;
+            let ff = |p: u32, x: DVec3, n: DVec3| {
+                let t = tshape.as_ref()?;
+                let cells = tail_cells(mesh, leaf_shot, &t.snap, PatchId(p), t.ubar[p as usize])?;
+                Some(shaped_form_factor(x, n, &cells, SHAPE_DEPTH))
+            };
+            let near = tshape.as_ref().map(|t| crate::tail::Near {
+                ff: &ff,
+                first: &t.first,
+            });
+            tr.corners(mesh, &shot_b, near.as_ref(), &cancel)
+        };
+        let Some((recv, total)) = corners else {
             self.tail = Some(TailStats {
                 after_shots: self.shots.len(),
                 rays,
@@ -988,6 +1183,7 @@ impl<'v> Solver<'v> {
         let checked = self.check_tail_interpolation(
             &tr,
             &shot_b,
+            tshape.as_ref(),
             &mut t_all,
             &centre_of,
             check_budget,
@@ -998,7 +1194,7 @@ impl<'v> Solver<'v> {
         // across an element, each new vertex gathering the tail exactly.
         let t3 = Instant::now();
         let budget = (self.opts.tail_refine * recv.len() as f64).ceil() as usize;
-        let refined = self.refine_tail(&tr, &shot_b, &mut t_all, budget, &cancel);
+        let refined = self.refine_tail(&tr, &shot_b, tshape.as_ref(), &mut t_all, budget, &cancel);
         let refine_seconds = t3.elapsed().as_secs_f64();
         drop(tr);
         drop(shot_b);
@@ -1014,6 +1210,11 @@ impl<'v> Solver<'v> {
             })
             .collect();
         self.shot = shot;
+        if self.opts.shape {
+            for p in 0..np {
+                self.mark_shot(PatchId(p as u32));
+            }
+        }
         self.tail = Some(TailStats {
             after_shots: self.shots.len(),
             receivers,
@@ -1045,10 +1246,12 @@ impl<'v> Solver<'v> {
     /// `budget` vertices gather (where a level would pass it, those where
     /// the tail is the largest share of the light). Returns the vertices
     /// gathered.
+    #[allow(clippy::too_many_arguments)]
     fn check_tail_interpolation(
         &mut self,
         tr: &crate::tail::Transport,
         shot_b: &[Rgb],
+        tshape: Option<&TailShape>,
         t_all: &mut [Rgb],
         centre_of: &rustc_hash::FxHashMap<u32, u32>,
         budget: usize,
@@ -1124,12 +1327,23 @@ impl<'v> Solver<'v> {
             }
             let dirs = self.inward(&ids);
             let mesh = &self.mesh;
+            let leaf_shot = &self.leaf_shot;
+            let ff = |p: u32, x: DVec3, n: DVec3| {
+                let t = tshape?;
+                let cells = tail_cells(mesh, leaf_shot, &t.snap, PatchId(p), t.ubar[p as usize])?;
+                Some(shaped_form_factor(x, n, &cells, SHAPE_DEPTH))
+            };
+            let near = tshape.map(|t| crate::tail::Near {
+                ff: &ff,
+                first: &t.first,
+            });
+            let near = near.as_ref();
             let got: Vec<Rgb> = ids
                 .par_iter()
                 .zip(&dirs)
                 .map(|(&v, &inward)| {
                     let size = tr.patch_size(libmesh::PatchId(patch_of[v.idx()]));
-                    tr.at(mesh, v, inward, size, &[patch_of[v.idx()]], shot_b)
+                    tr.at(mesh, v, inward, size, &[patch_of[v.idx()]], shot_b, near)
                 })
                 .collect();
             gathered += ids.len();
@@ -1155,6 +1369,7 @@ impl<'v> Solver<'v> {
         &mut self,
         tr: &crate::tail::Transport,
         shot_b: &[Rgb],
+        tshape: Option<&TailShape>,
         t_all: &mut Vec<Rgb>,
         budget: usize,
         cancel: &(dyn Fn() -> bool + Sync),
@@ -1237,12 +1452,23 @@ impl<'v> Solver<'v> {
             let dirs = self.inward(&ids);
             let mesh = &self.mesh;
             let patch_of = &patch_of;
+            let leaf_shot = &self.leaf_shot;
+            let ff = |p: u32, x: DVec3, n: DVec3| {
+                let t = tshape?;
+                let cells = tail_cells(mesh, leaf_shot, &t.snap, PatchId(p), t.ubar[p as usize])?;
+                Some(shaped_form_factor(x, n, &cells, SHAPE_DEPTH))
+            };
+            let near = tshape.map(|t| crate::tail::Near {
+                ff: &ff,
+                first: &t.first,
+            });
+            let near = near.as_ref();
             let got: Vec<Rgb> = fresh
                 .par_iter()
                 .map(|&(v, e)| {
                     let inward = dirs[ids.binary_search(&v).expect("a fresh vertex")];
                     let size = tr.patch_size(mesh.elem_patch(e));
-                    tr.at(mesh, v, inward, size, &[patch_of[v.idx()]], shot_b)
+                    tr.at(mesh, v, inward, size, &[patch_of[v.idx()]], shot_b, near)
                 })
                 .collect();
             gathered += fresh.len();
@@ -1270,15 +1496,10 @@ impl<'v> Solver<'v> {
     }
 
     /// The §5.4 offset of each shooter piece: `offset` times its longest edge.
-    fn offsets(&self, shooters: &[(Vec<DVec3>, DVec3)]) -> Vec<f64> {
+    fn offsets(&self, shooters: &[Piece]) -> Vec<f64> {
         shooters
             .iter()
-            .map(|(poly, _)| {
-                let size = (0..poly.len())
-                    .map(|i| (poly[(i + 1) % poly.len()] - poly[i]).length())
-                    .fold(0.0, f64::max);
-                self.opts.offset * size
-            })
+            .map(|piece| self.opts.offset * piece.size)
             .collect()
     }
 
@@ -1293,6 +1514,37 @@ impl<'v> Solver<'v> {
     /// parent's linear interpolation.
     fn split_leaf(&mut self, e: ElemId) -> libmesh::Split {
         let split = self.mesh.split(e);
+        if !self.leaf_shot.is_empty() {
+            self.leaf_shot.resize(self.mesh.num_elements(), [0.0; 4]);
+            for &r in &split.refined {
+                let Some(children) = self.mesh.elem_children(r) else {
+                    continue;
+                };
+                let pc = self.mesh.elem_corners(r);
+                let pv = self.leaf_shot[r.idx()];
+                let at = |v: VertId| -> f32 {
+                    if let Some(k) = pc.iter().position(|&x| x == v) {
+                        return pv[k];
+                    }
+                    if let libmesh::VertexOrigin::Split([a, b]) = self.mesh.vertex_origin(v)
+                        && let (Some(i), Some(j)) = (
+                            pc.iter().position(|&x| x == a),
+                            pc.iter().position(|&x| x == b),
+                        )
+                    {
+                        return 0.5 * (pv[i] + pv[j]);
+                    }
+                    pv[..pc.len()].iter().sum::<f32>() / pc.len() as f32
+                };
+                for c in children {
+                    let mut out = [0.0; 4];
+                    for (k, &v) in self.mesh.elem_corners(c).iter().enumerate() {
+                        out[k] = at(v);
+                    }
+                    self.leaf_shot[c.idx()] = out;
+                }
+            }
+        }
         if self.qexact.is_empty() && self.qmean.is_empty() {
             return split;
         }
@@ -1351,7 +1603,7 @@ impl<'v> Solver<'v> {
     /// per leaf reached, no rays.
     fn quadrature(
         &mut self,
-        shooters: &[(Vec<DVec3>, DVec3)],
+        shooters: &[Piece],
         normal: DVec3,
         lit: &[VertId],
         exact: bool,
@@ -1363,14 +1615,15 @@ impl<'v> Solver<'v> {
         // a piece's plane, where §5.4 moved the receiver.
         let unoccluded = |x: DVec3, n: DVec3| -> Option<f64> {
             let mut f = 0.0;
-            for ((poly, c), &delta) in shooters.iter().zip(&deltas) {
+            for (piece, &delta) in shooters.iter().zip(&deltas) {
+                let c = &piece.c;
                 if !receives(x, n, *c, normal, delta) {
                     continue;
                 }
                 if normal.dot(x - *c) < delta {
                     return None;
                 }
-                f += point_to_polygon(x, n, poly);
+                f += piece.ff(x, n);
             }
             Some(f)
         };
@@ -1613,7 +1866,7 @@ impl<'v> Solver<'v> {
     fn shoot_at(
         &mut self,
         targets: Targets,
-        shooters: &[(Vec<DVec3>, DVec3)],
+        shooters: &[Piece],
         surface: SurfaceId,
         normal: DVec3,
     ) -> Vec<VertId> {
@@ -1650,7 +1903,7 @@ impl<'v> Solver<'v> {
         // §5.4 needs each receiver's direction into its own surface only for
         // candidates on (or just behind) a shooter's plane: find those first.
         let mut near_plane: Vec<VertId> = Vec::new();
-        for ((_, c), &delta) in shooters.iter().zip(&deltas) {
+        for (Piece { c, .. }, &delta) in shooters.iter().zip(&deltas) {
             for i in 0..n_targets {
                 let v = target(i);
                 if candidate(v, *c, delta) && normal.dot(mesh.receiver_pos(v) - *c) < delta {
@@ -1670,7 +1923,8 @@ impl<'v> Solver<'v> {
         let mesh = &self.mesh;
         let gain = &mut self.gain;
         let seen_flags = &mut self.seen;
-        for (((poly, c), &delta), hidden) in shooters.iter().zip(&deltas).zip(&hidden) {
+        for ((piece, &delta), hidden) in shooters.iter().zip(&deltas).zip(&hidden) {
+            let c = &piece.c;
             let shown = |v: VertId| {
                 hidden
                     .as_ref()
@@ -1706,7 +1960,7 @@ impl<'v> Solver<'v> {
                         }
                         let x =
                             offset_receiver(mesh.receiver_pos(v), || nudge(v), *c, normal, delta);
-                        point_to_polygon(x, mesh.vertex_normal(v), poly)
+                        piece.ff(x, mesh.vertex_normal(v))
                     })
                     .collect();
                 for ((&v, &s), f) in cand.iter().zip(&seen).zip(ff) {
@@ -1760,7 +2014,7 @@ impl<'v> Solver<'v> {
             }
             let depth = k.next_power_of_two().trailing_zeros();
             let mut state = Vec::new();
-            for ((poly, c), &delta) in shooters.iter().zip(&deltas) {
+            for (Piece { poly, c, w, .. }, &delta) in shooters.iter().zip(&deltas) {
                 let cand: Vec<VertId> = mixed
                     .iter()
                     .copied()
@@ -1778,7 +2032,7 @@ impl<'v> Solver<'v> {
                     &mut state,
                 );
                 for (&v, g) in cand.iter().zip(got) {
-                    self.gain[v.idx()] += g;
+                    self.gain[v.idx()] += w * g;
                 }
             }
         }
@@ -1952,7 +2206,7 @@ impl<'v> Solver<'v> {
     /// plane, so that jittered coplanar surfaces never hide each other).
     fn shot_targets(
         &self,
-        shooters: &[(Vec<DVec3>, DVec3)],
+        shooters: &[Piece],
         deltas: &[f64],
         shooter: SurfaceId,
         normal: DVec3,
@@ -1969,7 +2223,7 @@ impl<'v> Solver<'v> {
         let mays: Vec<Vec<u64>> = shooters
             .iter()
             .zip(deltas)
-            .map(|((_, c), &delta)| {
+            .map(|(Piece { c, .. }, &delta)| {
                 (0..words)
                     .into_par_iter()
                     .map(|w| {
@@ -2010,7 +2264,7 @@ impl<'v> Solver<'v> {
         if blockers && !cull {
             active.fill(0);
             let mut count = vec![0u32; ns];
-            for ((_, c), may) in shooters.iter().zip(&mays) {
+            for (Piece { c, .. }, may) in shooters.iter().zip(&mays) {
                 let hidden = self.hidden_patches(*c, shooter, normal, may);
                 let mut lit = may.clone();
                 // Surfaces whose every patch is hidden whole: not lit by this piece.
@@ -2041,7 +2295,7 @@ impl<'v> Solver<'v> {
             shooters
                 .iter()
                 .zip(&mays)
-                .map(|((_, c), may)| self.occlusion_cube(*c, may))
+                .map(|(Piece { c, .. }, may)| self.occlusion_cube(*c, may))
                 .collect()
         } else {
             Vec::new()
@@ -2083,7 +2337,7 @@ impl<'v> Solver<'v> {
         let bitmaps = shooters
             .iter()
             .enumerate()
-            .map(|(k, (_, c))| {
+            .map(|(k, Piece { c, .. })| {
                 let mut bits = vec![0u64; nv.div_ceil(64)];
                 if cull {
                     let cube = &cubes[k];
@@ -2701,6 +2955,101 @@ fn polygon_shadows(c: DVec3, o: &[DVec3], x: &[DVec3]) -> bool {
     })
 }
 
+/// The cells describing a value over element `e` (`value(leaf, corner)`)
+/// relative to `mean`: its elements at the deepest level with at most
+/// [`SHAPE_CELLS`] of them (a corner of a cell above the leaves takes the
+/// value of the leaf under it there); `None` where the value is uniform
+/// (within 2% of `mean` around `w`, the element's own relative mean).
+fn cells_of(
+    mesh: &Mesh,
+    e: ElemId,
+    value: impl Fn(ElemId, VertId) -> f64,
+    mean: f64,
+    w: f64,
+) -> Option<Vec<Cell>> {
+    let mut level = vec![e];
+    let cells_at: Vec<ElemId>;
+    loop {
+        let mut next = Vec::new();
+        for &x in &level {
+            match mesh.elem_children(x) {
+                Some(ch) => next.extend(ch),
+                None => next.push(x),
+            }
+        }
+        if next.len() > SHAPE_CELLS || next == level {
+            cells_at = level;
+            break;
+        }
+        level = next;
+    }
+    let mut uniform = true;
+    let cells: Vec<Cell> = cells_at
+        .iter()
+        .map(|&l| {
+            let cs = mesh.elem_corners(l);
+            let mut cell = Cell {
+                pts: [DVec3::ZERO; 4],
+                s: [0.0; 4],
+                n: cs.len() as u8,
+            };
+            for (k, &v) in cs.iter().enumerate() {
+                cell.pts[k] = mesh.vertex_pos(v);
+                let mut leaf = l;
+                while let Some(ch) = mesh.elem_children(leaf) {
+                    leaf = ch
+                        .into_iter()
+                        .find(|&c| mesh.elem_corners(c).contains(&v))
+                        .unwrap_or(ch[0]);
+                }
+                let r = value(leaf, v) / mean;
+                uniform &= (r - w).abs() <= 0.02;
+                cell.s[k] = r as f32;
+            }
+            if cs.len() == 3 {
+                cell.pts[3] = cell.pts[2];
+                cell.s[3] = cell.s[2];
+            }
+            cell
+        })
+        .collect();
+    (!uniform).then_some(cells)
+}
+
+/// The tail's first bounce over patch `p` as cells (see [`cells_of`]): the
+/// radiosity at the tail's start (`snap`, channel sums by vertex; a vertex
+/// made since takes its parents' mean) less what the leaf had shot, relative
+/// to the patch's mean `ubar`.
+fn tail_cells(
+    mesh: &Mesh,
+    leaf_shot: &[[f32; 4]],
+    snap: &[f32],
+    p: PatchId,
+    ubar: f64,
+) -> Option<Vec<Cell>> {
+    if ubar <= 0.0 {
+        return None;
+    }
+    fn val(mesh: &Mesh, snap: &[f32], v: VertId) -> f64 {
+        if let Some(&b) = snap.get(v.idx()) {
+            return f64::from(b);
+        }
+        match mesh.vertex_origin(v) {
+            libmesh::VertexOrigin::Split([a, b]) => 0.5 * (val(mesh, snap, a) + val(mesh, snap, b)),
+            libmesh::VertexOrigin::Input(_) => 0.0,
+        }
+    }
+    let value = |l: ElemId, v: VertId| {
+        let k = mesh.elem_corners(l).iter().position(|&x| x == v);
+        let s = match (leaf_shot.get(l.idx()), k) {
+            (Some(s), Some(k)) => f64::from(s[k]),
+            _ => 0.0,
+        };
+        (val(mesh, snap, v) - s).max(0.0)
+    };
+    cells_of(mesh, mesh.patch_root(p), value, ubar, 1.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -2835,7 +3184,18 @@ mod tests {
         ] {
             let n = m.surface_normal(s);
             let delta = 1e-3;
-            let (all, bitmaps) = solver.shot_targets(&[(Vec::new(), c)], &[delta], s, n);
+            let (all, bitmaps) = solver.shot_targets(
+                &[Piece {
+                    poly: Vec::new(),
+                    c,
+                    w: 1.0,
+                    size: 0.0,
+                    cells: None,
+                }],
+                &[delta],
+                s,
+                n,
+            );
             let bits = bitmaps[0].as_ref().expect("the ray caster names blockers");
             for v in 0..m.num_vertices() {
                 let vid = VertId(v as u32);

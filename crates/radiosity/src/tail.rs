@@ -74,6 +74,19 @@ use crate::formfactor::{offset_receiver, point_to_polygon, receives};
 
 type Rgb = [f64; 3];
 
+/// The light of the tail's first bounce shaped as it lies on each patch:
+/// for a receiver near patch `p` (at `x`, normal `n`), the form factor
+/// weighted by the patch's unshot radiosity relative to its mean (`None`
+/// where that is uniform), and per patch the radiosity of that first bounce.
+pub struct Near<'a> {
+    pub ff: &'a (dyn Fn(u32, DVec3, DVec3) -> Option<f64> + Sync),
+    pub first: &'a [Rgb],
+}
+
+/// Receivers nearer a patch's centre than this many patch sizes take its
+/// first bounce shaped ([`Near`]).
+const NEAR: f64 = 2.0;
+
 /// Geometry of one patch as a shooter.
 struct Shooter {
     first: u32,
@@ -497,6 +510,36 @@ impl Transport {
         out
     }
 
+    /// What shaping the first bounce ([`Near`]) changes in the irradiance
+    /// that patch centres gather from it: per centre, over its stored row's
+    /// patches near it, (shaped − uniform form factor) × first bounce.
+    pub fn first_bounce_correction(&self, near: &Near) -> Vec<Rgb> {
+        (0..self.shooters.len())
+            .into_par_iter()
+            .map(|q| {
+                let r = self.centre_receiver(q);
+                let mut h = [0.0; 3];
+                for k in self.start[q]..self.start[q + 1] {
+                    let p = self.patch[k];
+                    let sh = &self.shooters[p as usize];
+                    let x = offset_receiver(r.x, || r.inward, sh.centre, sh.normal, sh.delta);
+                    if x.distance_squared(sh.centre) >= (NEAR * sh.size).powi(2) {
+                        continue;
+                    }
+                    let Some(f) = (near.ff)(p, x, r.n) else {
+                        continue;
+                    };
+                    let d = f - self.weight[k] as f64;
+                    let u = near.first[p as usize];
+                    for c in 0..3 {
+                        h[c] += d * u[c];
+                    }
+                }
+                h
+            })
+            .collect()
+    }
+
     /// Irradiance added at each patch centre by patches of unshot radiosity `u`.
     pub fn gather(&self, u: &[Rgb]) -> Vec<Rgb> {
         (0..self.shooters.len())
@@ -523,6 +566,7 @@ impl Transport {
         &self,
         mesh: &Mesh,
         s: &[Rgb],
+        near: Option<&Near>,
         cancel: &(dyn Fn() -> bool + Sync),
     ) -> Option<(Vec<VertId>, Vec<Rgb>)> {
         let nv = mesh.num_vertices();
@@ -554,7 +598,7 @@ impl Transport {
                         .iter()
                         .map(|&p| self.shooters[p as usize].size)
                         .fold(0.0, f64::max);
-                    self.at(mesh, v, inward, size, patches, s)
+                    self.at(mesh, v, inward, size, patches, s, near)
                 })
                 .collect();
             out.extend(part);
@@ -600,6 +644,7 @@ impl Transport {
     /// its surface; `size` is the size of its patches; `at` are the patches
     /// it lies in (or on): after [`Transport::compact_rows`], their
     /// neighbours' centre rows are its candidates.
+    #[allow(clippy::too_many_arguments)]
     pub fn at(
         &self,
         mesh: &Mesh,
@@ -608,6 +653,7 @@ impl Transport {
         size: f64,
         at: &[u32],
         s: &[Rgb],
+        near: Option<&Near>,
     ) -> Rgb {
         let r = Receiver {
             x: mesh.receiver_pos(v),
@@ -632,8 +678,26 @@ impl Transport {
         let mut h = [0.0; 3];
         for (p, w) in row {
             let b = s[p as usize];
-            for k in 0..3 {
-                h[k] += w as f64 * b[k];
+            let sh = &self.shooters[p as usize];
+            // The first bounce shaped, near the patch.
+            let shaped = near.and_then(|nr| {
+                let x = offset_receiver(r.x, || r.inward, sh.centre, sh.normal, sh.delta);
+                if x.distance_squared(sh.centre) >= (NEAR * sh.size).powi(2) {
+                    return None;
+                }
+                (nr.ff)(p, x, r.n).map(|f| (f, nr.first[p as usize]))
+            });
+            match shaped {
+                Some((f, u)) => {
+                    for k in 0..3 {
+                        h[k] += w as f64 * (b[k] - u[k]) + f * u[k];
+                    }
+                }
+                None => {
+                    for k in 0..3 {
+                        h[k] += w as f64 * b[k];
+                    }
+                }
             }
         }
         h
