@@ -525,9 +525,34 @@ f bottom (a b c d) glow; f top (e h g f) glow; f front (a e f b) glow;
 f back (c g h d) glow; f left (a d h e) glow; f right (b f g c) glow;
 ";
     let patches = run_ok("ugcut", &["-q", "-l", "0.25"], Some(furnace.as_bytes()));
+    // Shaped shooters (the default): each shot is shared as the unshot
+    // light lies, which in the furnace is uneven until the end (a face's
+    // edge has more from the faces that shot first), and the linear
+    // elements carry that shape a little off at the cube's edges (2.0041
+    // measured at worst).
     let out = run_ok(
         "ugrad",
         &["-q", "--converge", "1e-4", "--visibility", "ray"],
+        Some(patches.as_bytes()),
+    );
+    let m = ug::parse(out.as_bytes(), "lit").unwrap().model;
+    for v in &m.vertices {
+        let b = m.material(v.color.unwrap()).diffuse();
+        for c in b {
+            assert!((c - 2.0).abs() <= 5e-3, "{}: {b:?}", v.name);
+        }
+    }
+    // Uniform shooters: uniform to 1e-3.
+    let out = run_ok(
+        "ugrad",
+        &[
+            "-q",
+            "--converge",
+            "1e-4",
+            "--visibility",
+            "ray",
+            "--uniform-shooters",
+        ],
         Some(patches.as_bytes()),
     );
     let m = ug::parse(out.as_bytes(), "lit").unwrap().model;
@@ -587,12 +612,13 @@ fn a_closed_box_absorbs_what_its_lamp_emits() {
     assert!(balance.abs() < 2e-3, "{balance}");
 }
 
-/// The same balance with each shooter's light shared over it as its
-/// radiosity lies (`--shaped-shooters`): shaping moves light between
-/// receivers near a shooter, it must not make or lose any.
+/// The same balance with every shooter's light taken as uniform over it
+/// (`--uniform-shooters`, the report's rule; the default shares it as it
+/// lies, which moves light between receivers near a shooter and must not
+/// make or lose any: −0.10% measured, +0.09% uniform).
 #[test]
-fn shaped_shooters_keep_the_closed_box_balance() {
-    let balance = closed_box_balance(&["--shaped-shooters"]);
+fn uniform_shooters_keep_the_closed_box_balance() {
+    let balance = closed_box_balance(&["--uniform-shooters"]);
     assert!(balance.abs() < 2e-3, "{balance}");
 }
 

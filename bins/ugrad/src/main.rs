@@ -168,16 +168,15 @@ struct Args {
     /// (rounded up to a power of two; 1: off).
     #[arg(long, value_name = "N", default_value_t = 16)]
     penumbra_split: usize,
-    /// Share each shooter's light over it as its unshot radiosity lies, for
-    /// receivers within two patch sizes of it and in the tail's first
-    /// bounce, instead of uniformly (the report's rule). At a wall's foot
-    /// the adjacent floor's light is then its light at the junction, not its
-    /// patch's mean: junction vertices that were +20 to +40% come within a
-    /// few percent. Experimental (off by default): on the nine-room building
-    /// rms 3.3 -> 3.0% at -l 3%, the Cornell box and the furnished room
-    /// unchanged but for one point (docs/decisions.md).
+    /// Take each shooter's light as uniform over it (the report's rule).
+    /// By default it is shared over the shooter as its unshot radiosity
+    /// lies, for receivers within two patch sizes of it and in the tail's
+    /// first bounce: at a wall's foot the adjacent floor's light is then its
+    /// light at the junction, not its patch's mean (junction vertices were
+    /// +11 to +40% on the Cornell box and a nine-room building; see
+    /// docs/decisions.md, "Shaped shooters").
     #[arg(long)]
-    shaped_shooters: bool,
+    uniform_shooters: bool,
 }
 
 /// `--patch-length`: model units, or a percentage of the diagonal.
@@ -334,7 +333,7 @@ fn main() -> std::process::ExitCode {
             tail_rays: args.tail_rays,
             tail_refine: args.tail_refine,
             regather: !args.no_regather,
-            shape: args.shaped_shooters,
+            shape: !args.uniform_shooters,
             cull_res: args.cull_res,
             penumbra_split: args.penumbra_split.max(1),
             ..radiosity::Options::default()

@@ -226,7 +226,7 @@ impl Default for Options {
             regather: true,
             cull_res: 128,
             cull_targets: 20_000,
-            shape: false,
+            shape: true,
         }
     }
 }
