@@ -11,6 +11,7 @@
 # Usage: benches/accuracy.sh [SETTING...]   a setting is LEN:CONVERGE[:TAIL]
 #        (default: 3%:1e-3 2%:1e-3 1.5%:1e-4 2%:1e-3:0)
 # Environment: POINTS (200), SAMPLES (paths per point, 16384), SEED (1),
+# UGRAD_ARGS (more ugrad options, e.g. --uniform-shooters),
 # MODELS (default "cornell room building"), NO_BUILD=1 uses target/release
 # as it is, KEEP=1 keeps the directory.
 #
@@ -61,6 +62,8 @@ for model in $MODELS; do
         "$bin/ugcut" -q -l "$len" "$tmp/$model.ug" > "$tmp/p.ug"
         targs=()
         [ "$tail" != default ] && targs=(--tail "$tail")
+        # shellcheck disable=SC2206
+        [ -n "${UGRAD_ARGS:-}" ] && targs+=(${UGRAD_ARGS})
         t0=$(date +%s%N)
         "$bin/ugrad" -q --converge "$conv" "${targs[@]}" "$tmp/p.ug" > "$tmp/lit.ug"
         t1=$(date +%s%N)

@@ -172,6 +172,41 @@ pub fn shaped_form_factor(x: DVec3, n: DVec3, cells: &[Cell], depth: u32) -> f64
     cells.iter().map(|c| one(x, n, c, depth, &mut buf)).sum()
 }
 
+/// [`shaped_form_factor`] for two shapes over the same cells (the same
+/// patch's leaves: `a` and `b` as [`shaped_form_factor`] takes them, cell
+/// for cell the same corners), sharing the subdivision and each part's
+/// contour integral: `(∫ s_a dF, ∫ s_b dF)`.
+pub fn shaped_form_factor_pair(
+    x: DVec3,
+    n: DVec3,
+    a: &[Cell],
+    b: &[Cell],
+    depth: u32,
+) -> (f64, f64) {
+    fn one(x: DVec3, n: DVec3, a: &Cell, b: &Cell, depth: u32, buf: &mut Vec<DVec3>) -> (f64, f64) {
+        if depth > 0 && a.diameter2() > 0.25 * a.centroid().distance_squared(x) {
+            let (ka, kb) = (a.children(), b.children());
+            return ka.iter().zip(&kb).fold((0.0, 0.0), |acc, (ca, cb)| {
+                let f = one(x, n, ca, cb, depth - 1, buf);
+                (acc.0 + f.0, acc.1 + f.1)
+            });
+        }
+        let (ma, mb) = (a.mean(), b.mean());
+        if ma == 0.0 && mb == 0.0 {
+            return (0.0, 0.0);
+        }
+        clip_to_front(&a.pts[..a.n as usize], x, n, buf);
+        let f = contour_integral(x, n, buf);
+        (ma * f, mb * f)
+    }
+    debug_assert_eq!(a.len(), b.len());
+    let mut buf = Vec::with_capacity(6);
+    a.iter().zip(b).fold((0.0, 0.0), |acc, (ca, cb)| {
+        let f = one(x, n, ca, cb, depth, &mut buf);
+        (acc.0 + f.0, acc.1 + f.1)
+    })
+}
+
 /// The contour integral itself, without clipping (the polygon must lie in the
 /// receiver's front half-space).
 pub fn contour_integral(x: DVec3, n: DVec3, poly: &[DVec3]) -> f64 {
@@ -351,5 +386,38 @@ mod tests {
         let g = shaped_form_factor(x, DVec3::Z, &[t], 12);
         let f = point_to_polygon(x, DVec3::Z, &sq[..3]);
         assert!(g > 0.0 && g < 2.0 * f, "{g} {f}");
+    }
+
+    #[test]
+    fn the_pair_is_each_shape_on_its_own() {
+        let sq = square(1.0);
+        let a = [
+            Cell {
+                pts: [sq[0], sq[1], sq[2], sq[3]],
+                s: [0.2, 1.8, 1.8, 0.2],
+                n: 4,
+            },
+            Cell {
+                pts: [sq[0], sq[1], sq[2], sq[2]],
+                s: [0.0, 1.0, 2.0, 2.0],
+                n: 3,
+            },
+        ];
+        let mut b = a;
+        b[0].s = [1.5, 0.5, 0.0, 2.0];
+        b[1].s = [0.0; 4];
+        for x in [
+            DVec3::new(0.5, 0.5, -20.0),
+            DVec3::new(0.2, 0.3, 0.9),
+            DVec3::new(0.0, 0.0, 1e-7),
+            DVec3::new(0.6, 0.3, -0.05),
+        ] {
+            for n in [DVec3::Z, DVec3::X, -DVec3::Z] {
+                let (fa, fb) = shaped_form_factor_pair(x, n, &a, &b, 12);
+                let ga = shaped_form_factor(x, n, &a, 12);
+                let gb = shaped_form_factor(x, n, &b, 12);
+                assert_eq!((fa, fb), (ga, gb), "{x} {n}");
+            }
+        }
     }
 }

@@ -11,7 +11,9 @@ use rayon::prelude::*;
 use ug::{Item, Material, MaterialDef, MaterialId, Model};
 
 use crate::cube::OcclusionCube;
-use crate::formfactor::{Cell, offset_receiver, point_to_polygon, receives, shaped_form_factor};
+use crate::formfactor::{
+    Cell, offset_receiver, point_to_polygon, receives, shaped_form_factor, shaped_form_factor_pair,
+};
 use crate::visibility::Visibility;
 
 type Rgb = [f64; 3];
@@ -1078,6 +1080,8 @@ impl<'v> Solver<'v> {
                 let near = crate::tail::Near {
                     ff: &ff,
                     first: &t.first,
+                    rest: None,
+                    both: None,
                 };
                 let corr = tr.first_bounce_correction(&near);
                 for (h, c) in dh.iter_mut().zip(corr) {
@@ -1116,6 +1120,8 @@ impl<'v> Solver<'v> {
             let near = tshape.as_ref().map(|t| crate::tail::Near {
                 ff: &ff,
                 first: &t.first,
+                rest: None,
+                both: None,
             });
             tr.corners(mesh, &shot_b, near.as_ref(), &cancel)
         };
@@ -1158,25 +1164,59 @@ impl<'v> Solver<'v> {
         }
         // Every vertex: a corner its own total, a patch centre its centre's,
         // any other split vertex the mean of its parents'.
-        let mut t_all: Vec<Rgb> = vec![[0.0; 3]; nv];
-        let mut k = 0;
-        for v in 0..nv {
-            let t = match self.mesh.vertex_origin(VertId(v as u32)) {
-                libmesh::VertexOrigin::Split([a, b]) => match centre_of.get(&(v as u32)) {
-                    Some(&p) => centre_h[p as usize],
-                    None => scale(add(t_all[a.idx()], t_all[b.idx()]), 0.5),
-                },
-                libmesh::VertexOrigin::Input(_) => {
-                    if k < recv.len() && recv[k].idx() == v {
-                        k += 1;
-                        total[k - 1]
-                    } else {
-                        [0.0; 3]
+        let interpolate = |mesh: &Mesh, total: &[Rgb]| -> Vec<Rgb> {
+            let mut t_all: Vec<Rgb> = vec![[0.0; 3]; nv];
+            let mut k = 0;
+            for v in 0..nv {
+                t_all[v] = match mesh.vertex_origin(VertId(v as u32)) {
+                    libmesh::VertexOrigin::Split([a, b]) => match centre_of.get(&(v as u32)) {
+                        Some(&p) => centre_h[p as usize],
+                        None => scale(add(t_all[a.idx()], t_all[b.idx()]), 0.5),
+                    },
+                    libmesh::VertexOrigin::Input(_) => {
+                        if k < recv.len() && recv[k].idx() == v {
+                            k += 1;
+                            total[k - 1]
+                        } else {
+                            [0.0; 3]
+                        }
                     }
-                }
+                };
+            }
+            t_all
+        };
+        let mut total = total;
+        let mut t_all = interpolate(&self.mesh, &total);
+        // The later bounces shaped near each patch as the tail's light now
+        // lies on it: a second pass over the corners, near patches only.
+        if let Some(t) = &tshape {
+            let mesh = &self.mesh;
+            let leaf_shot = &self.leaf_shot;
+            let ff = |p: u32, x: DVec3, n: DVec3| {
+                let cells = tail_cells(mesh, leaf_shot, &t.snap, PatchId(p), t.ubar[p as usize])?;
+                Some(shaped_form_factor(x, n, &cells, SHAPE_DEPTH))
             };
-            t_all[v] = t;
-            self.h[v] = add(self.h[v], t);
+            let tref = &t_all;
+            let rest = |p: u32, x: DVec3, n: DVec3| {
+                let cells = rest_cells(mesh, tref, PatchId(p))?;
+                Some(shaped_form_factor(x, n, &cells, SHAPE_DEPTH))
+            };
+            let near = crate::tail::Near {
+                ff: &ff,
+                first: &t.first,
+                rest: Some(&rest),
+                both: None,
+            };
+            let corr = tr.rest_corrections(mesh, &recv, &shot_b, &near);
+            for (x, c) in total.iter_mut().zip(corr) {
+                for k in 0..3 {
+                    x[k] = (x[k] + c[k]).max(0.0);
+                }
+            }
+            t_all = interpolate(&self.mesh, &total);
+        }
+        for (h, t) in self.h.iter_mut().zip(&t_all) {
+            *h = add(*h, *t);
         }
         let t_check = Instant::now();
         let check_budget = (self.opts.tail_refine * recv.len() as f64).ceil() as usize;
@@ -1333,9 +1373,24 @@ impl<'v> Solver<'v> {
                 let cells = tail_cells(mesh, leaf_shot, &t.snap, PatchId(p), t.ubar[p as usize])?;
                 Some(shaped_form_factor(x, n, &cells, SHAPE_DEPTH))
             };
+            let tref: &[Rgb] = t_all;
+            let rest = |p: u32, x: DVec3, n: DVec3| {
+                let cells = rest_cells(mesh, tref, PatchId(p))?;
+                Some(shaped_form_factor(x, n, &cells, SHAPE_DEPTH))
+            };
+            let both = |p: u32, x: DVec3, n: DVec3| {
+                let Some(t) = tshape else {
+                    return (None, None);
+                };
+                let a = tail_cells(mesh, leaf_shot, &t.snap, PatchId(p), t.ubar[p as usize]);
+                let b = rest_cells(mesh, tref, PatchId(p));
+                shaped_pair(x, n, a.as_deref(), b.as_deref())
+            };
             let near = tshape.map(|t| crate::tail::Near {
                 ff: &ff,
                 first: &t.first,
+                rest: Some(&rest),
+                both: Some(&both),
             });
             let near = near.as_ref();
             let got: Vec<Rgb> = ids
@@ -1458,9 +1513,24 @@ impl<'v> Solver<'v> {
                 let cells = tail_cells(mesh, leaf_shot, &t.snap, PatchId(p), t.ubar[p as usize])?;
                 Some(shaped_form_factor(x, n, &cells, SHAPE_DEPTH))
             };
+            let tref: &[Rgb] = t_all;
+            let rest = |p: u32, x: DVec3, n: DVec3| {
+                let cells = rest_cells(mesh, tref, PatchId(p))?;
+                Some(shaped_form_factor(x, n, &cells, SHAPE_DEPTH))
+            };
+            let both = |p: u32, x: DVec3, n: DVec3| {
+                let Some(t) = tshape else {
+                    return (None, None);
+                };
+                let a = tail_cells(mesh, leaf_shot, &t.snap, PatchId(p), t.ubar[p as usize]);
+                let b = rest_cells(mesh, tref, PatchId(p));
+                shaped_pair(x, n, a.as_deref(), b.as_deref())
+            };
             let near = tshape.map(|t| crate::tail::Near {
                 ff: &ff,
                 first: &t.first,
+                rest: Some(&rest),
+                both: Some(&both),
             });
             let near = near.as_ref();
             let got: Vec<Rgb> = fresh
@@ -3014,6 +3084,59 @@ fn cells_of(
         })
         .collect();
     (!uniform).then_some(cells)
+}
+
+/// The form factors weighted by two shapes of one patch (either absent:
+/// uniform), the geometry shared where both are there.
+fn shaped_pair(
+    x: DVec3,
+    n: DVec3,
+    a: Option<&[Cell]>,
+    b: Option<&[Cell]>,
+) -> (Option<f64>, Option<f64>) {
+    match (a, b) {
+        (Some(a), Some(b)) if a.len() == b.len() => {
+            let (fa, fb) = shaped_form_factor_pair(x, n, a, b, SHAPE_DEPTH);
+            (Some(fa), Some(fb))
+        }
+        _ => (
+            a.map(|c| shaped_form_factor(x, n, c, SHAPE_DEPTH)),
+            b.map(|c| shaped_form_factor(x, n, c, SHAPE_DEPTH)),
+        ),
+    }
+}
+
+/// The tail's light over patch `p` as cells (see [`cells_of`]): the
+/// irradiance it brought each vertex (`t`; ρ is one per surface, so its
+/// shape is that of the later bounces' radiosity), relative to its mean
+/// over the patch; a vertex made since takes its parents' mean.
+fn rest_cells(mesh: &Mesh, t: &[Rgb], p: PatchId) -> Option<Vec<Cell>> {
+    fn val(mesh: &Mesh, t: &[Rgb], v: VertId) -> f64 {
+        if let Some(&b) = t.get(v.idx()) {
+            return sum(b);
+        }
+        match mesh.vertex_origin(v) {
+            libmesh::VertexOrigin::Split([a, b]) => 0.5 * (val(mesh, t, a) + val(mesh, t, b)),
+            libmesh::VertexOrigin::Input(_) => 0.0,
+        }
+    }
+    let (mut acc, mut area) = (0.0, 0.0);
+    mesh.for_each_patch_leaf(p, |e| {
+        let c = mesh.elem_corners(e);
+        let a = mesh.elem_area(e);
+        acc += a * c.iter().map(|&v| val(mesh, t, v)).sum::<f64>() / c.len() as f64;
+        area += a;
+    });
+    if acc <= 0.0 || area <= 0.0 {
+        return None;
+    }
+    cells_of(
+        mesh,
+        mesh.patch_root(p),
+        |_, v| val(mesh, t, v),
+        acc / area,
+        1.0,
+    )
 }
 
 /// The tail's first bounce over patch `p` as cells (see [`cells_of`]): the

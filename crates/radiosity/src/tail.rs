@@ -74,6 +74,9 @@ use crate::formfactor::{offset_receiver, point_to_polygon, receives};
 
 type Rgb = [f64; 3];
 
+/// Two shaped form factors of one patch at a point (see [`Near::both`]).
+pub type ShapedPair<'a> = dyn Fn(u32, DVec3, DVec3) -> (Option<f64>, Option<f64>) + Sync + 'a;
+
 /// The light of the tail's first bounce shaped as it lies on each patch:
 /// for a receiver near patch `p` (at `x`, normal `n`), the form factor
 /// weighted by the patch's unshot radiosity relative to its mean (`None`
@@ -81,6 +84,12 @@ type Rgb = [f64; 3];
 pub struct Near<'a> {
     pub ff: &'a (dyn Fn(u32, DVec3, DVec3) -> Option<f64> + Sync),
     pub first: &'a [Rgb],
+    /// The later bounces shaped too, as the tail's own light lies on each
+    /// patch (known once its corners have gathered): the same for them.
+    pub rest: Option<&'a (dyn Fn(u32, DVec3, DVec3) -> Option<f64> + Sync)>,
+    /// `ff` and `rest` at once, sharing the geometry (where both are
+    /// given, the gathers take this).
+    pub both: Option<&'a ShapedPair<'a>>,
 }
 
 /// Receivers nearer a patch's centre than this many patch sizes take its
@@ -606,6 +615,34 @@ impl Transport {
         Some((recv, out))
     }
 
+    /// [`Transport::rest_correction`] at each of the corners `recv` (as
+    /// [`Transport::corners`] returned them).
+    pub fn rest_corrections(
+        &self,
+        mesh: &Mesh,
+        recv: &[VertId],
+        s: &[Rgb],
+        near: &Near,
+    ) -> Vec<Rgb> {
+        let (count, at) = patches_at_corners(mesh);
+        recv.par_iter()
+            .map(|&v| {
+                let x = mesh.receiver_pos(v);
+                let patches = &at[count[v.idx()] as usize..count[v.idx() + 1] as usize];
+                let inward = patches
+                    .iter()
+                    .map(|&p| (self.shooters[p as usize].centre - x).normalize_or_zero())
+                    .sum::<DVec3>()
+                    .normalize_or_zero();
+                let size = patches
+                    .iter()
+                    .map(|&p| self.shooters[p as usize].size)
+                    .fold(0.0, f64::max);
+                self.rest_correction(mesh, v, inward, size, patches, s, near)
+            })
+            .collect()
+    }
+
     /// The longest edge of patch `p`.
     pub fn patch_size(&self, p: libmesh::PatchId) -> f64 {
         self.shooters[p.idx()].size
@@ -678,26 +715,91 @@ impl Transport {
         let mut h = [0.0; 3];
         for (p, w) in row {
             let b = s[p as usize];
+            // The first bounce (and the later ones) shaped, near the patch.
+            let (fu, fr) = self.near_ff(&r, p, w as f64, near);
+            let u = near.map_or([0.0; 3], |nr| nr.first[p as usize]);
+            for k in 0..3 {
+                h[k] += fu * u[k] + fr * (b[k] - u[k]);
+            }
+        }
+        h
+    }
+
+    /// The form factors a receiver takes for patch `p`'s first bounce and
+    /// for its later ones: `w` (uniform) unless `near` shapes them there.
+    fn near_ff(&self, r: &Receiver, p: u32, w: f64, near: Option<&Near>) -> (f64, f64) {
+        let Some(nr) = near else {
+            return (w, w);
+        };
+        let sh = &self.shooters[p as usize];
+        let x = offset_receiver(r.x, || r.inward, sh.centre, sh.normal, sh.delta);
+        if x.distance_squared(sh.centre) >= (NEAR * sh.size).powi(2) {
+            return (w, w);
+        }
+        if let Some(both) = nr.both {
+            let (fu, fr) = both(p, x, r.n);
+            return (fu.unwrap_or(w), fr.unwrap_or(w));
+        }
+        let fu = (nr.ff)(p, x, r.n).unwrap_or(w);
+        let fr = nr.rest.and_then(|f| f(p, x, r.n)).unwrap_or(w);
+        (fu, fr)
+    }
+
+    /// What shaping the later bounces changes at mesh vertex `v` (see
+    /// [`Transport::at`]), from the patches near it only: a second, cheap
+    /// pass over the corners once their first gather has given the tail's
+    /// light its shape.
+    #[allow(clippy::too_many_arguments)]
+    pub fn rest_correction(
+        &self,
+        mesh: &Mesh,
+        v: VertId,
+        inward: DVec3,
+        size: f64,
+        at: &[u32],
+        s: &[Rgb],
+        near: &Near,
+    ) -> Rgb {
+        let Some(rest) = near.rest else {
+            return [0.0; 3];
+        };
+        let r = Receiver {
+            x: mesh.receiver_pos(v),
+            n: mesh.vertex_normal(v),
+            surface: mesh.vertex_surface(v).0,
+            inward,
+            size,
+            seed: mix(v.0 as u64),
+        };
+        let cand = if self.seen_start.is_empty()
+            || !at
+                .iter()
+                .all(|&p| self.surf.get(p as usize) == Some(&r.surface))
+        {
+            self.candidates(&r)
+        } else {
+            self.near_candidates(at)
+        };
+        let cand: Vec<u32> = cand
+            .into_iter()
+            .filter(|&p| {
+                let sh = &self.shooters[p as usize];
+                r.x.distance_squared(sh.centre) < (NEAR * sh.size + sh.size).powi(2)
+            })
+            .collect();
+        let mut h = [0.0; 3];
+        for (p, w) in self.row(&r, cand) {
             let sh = &self.shooters[p as usize];
-            // The first bounce shaped, near the patch.
-            let shaped = near.and_then(|nr| {
-                let x = offset_receiver(r.x, || r.inward, sh.centre, sh.normal, sh.delta);
-                if x.distance_squared(sh.centre) >= (NEAR * sh.size).powi(2) {
-                    return None;
-                }
-                (nr.ff)(p, x, r.n).map(|f| (f, nr.first[p as usize]))
-            });
-            match shaped {
-                Some((f, u)) => {
-                    for k in 0..3 {
-                        h[k] += w as f64 * (b[k] - u[k]) + f * u[k];
-                    }
-                }
-                None => {
-                    for k in 0..3 {
-                        h[k] += w as f64 * b[k];
-                    }
-                }
+            let x = offset_receiver(r.x, || r.inward, sh.centre, sh.normal, sh.delta);
+            if x.distance_squared(sh.centre) >= (NEAR * sh.size).powi(2) {
+                continue;
+            }
+            let Some(f) = rest(p, x, r.n) else {
+                continue;
+            };
+            let (b, u) = (s[p as usize], near.first[p as usize]);
+            for k in 0..3 {
+                h[k] += (f - w as f64) * (b[k] - u[k]);
             }
         }
         h

@@ -97,65 +97,75 @@ fn enclosure() -> String {
 
 #[test]
 fn closed_enclosure_converges_to_e_over_one_minus_rho_with_exact_bookkeeping() {
-    let model = patches(&enclosure(), 0.25);
-    let mesh = libmesh::Mesh::from_model(&model, 1e-9).unwrap();
-    let vis = RayVisibility::new(&mesh);
-    let opts = Options {
-        converge: 1e-6,
-        gradient: Some(1e30),
-        ..Options::default()
-    };
-    let mut solver = Solver::new(mesh, &model.materials, &vis, opts);
-    let emitted = solver.emitted();
-    assert!(
-        (emitted - 3.0 * 6.0).abs() < 1e-12,
-        "E·A summed over channels: {emitted}"
-    );
-    let mut reflected = 0.0;
-    let mut shots = 0;
-    while let Some(p) = (0..solver.mesh.num_patches())
-        .map(|p| libmesh::PatchId(p as u32))
-        .max_by(|a, b| {
-            let (x, y) = (solver.unshot(*a), solver.unshot(*b));
-            (x[0] + x[1] + x[2])
-                .total_cmp(&(y[0] + y[1] + y[2]))
-                .then(b.0.cmp(&a.0))
-        })
-    {
-        if solver.unshot_fraction() <= 1e-6 || shots > 5000 {
-            break;
+    // Uniform shooters (the report's rule) reach B = 2 to 0.1%; shaped
+    // shooters (the default) to 0.3% (1.9966 and 2.0056 measured at worst,
+    // at the box's edges): each shot ships the patch's unshot energy (its
+    // elements' trapezoid rule plus the centre-sample correction) in the
+    // shape of its corners' unshot radiosity, and the two records drift
+    // apart a little over a thousand shots (docs/decisions.md, "Shaped
+    // shooters").
+    for (shape, tol) in [(false, 2e-3), (true, 6e-3)] {
+        let model = patches(&enclosure(), 0.25);
+        let mesh = libmesh::Mesh::from_model(&model, 1e-9).unwrap();
+        let vis = RayVisibility::new(&mesh);
+        let opts = Options {
+            converge: 1e-6,
+            gradient: Some(1e30),
+            shape,
+            ..Options::default()
+        };
+        let mut solver = Solver::new(mesh, &model.materials, &vis, opts);
+        let emitted = solver.emitted();
+        assert!(
+            (emitted - 3.0 * 6.0).abs() < 1e-12,
+            "E·A summed over channels: {emitted}"
+        );
+        let mut reflected = 0.0;
+        let mut shots = 0;
+        while let Some(p) = (0..solver.mesh.num_patches())
+            .map(|p| libmesh::PatchId(p as u32))
+            .max_by(|a, b| {
+                let (x, y) = (solver.unshot(*a), solver.unshot(*b));
+                (x[0] + x[1] + x[2])
+                    .total_cmp(&(y[0] + y[1] + y[2]))
+                    .then(b.0.cmp(&a.0))
+            })
+        {
+            if solver.unshot_fraction() <= 1e-6 || shots > 5000 {
+                break;
+            }
+            let s = solver.shoot(p).expect("energy to shoot");
+            shots += 1;
+            // Bookkeeping, shot by shot: the patches hold what was emitted plus
+            // everything reflected so far …
+            reflected += s.reflected;
+            let total = solver.total_energy();
+            assert!(
+                (total - emitted - reflected).abs() <= 1e-9 * total,
+                "shot {shots}: {total} vs {}",
+                emitted + reflected
+            );
+            // … and in a closed room every shot's energy arrives somewhere (up to
+            // the vertex-average quadrature of what the elements received, which
+            // is coarse next to the shooter's edges).
+            assert!(
+                (s.received - s.energy).abs() <= 0.1 * s.energy,
+                "shot {shots}: shot {} received {}",
+                s.energy,
+                s.received
+            );
+            // ρ = 0.5 everywhere: half of what arrives is reflected.
+            assert!((s.reflected - 0.5 * s.received).abs() <= 1e-12 * s.received);
         }
-        let s = solver.shoot(p).expect("energy to shoot");
-        shots += 1;
-        // Bookkeeping, shot by shot: the patches hold what was emitted plus
-        // everything reflected so far …
-        reflected += s.reflected;
-        let total = solver.total_energy();
         assert!(
-            (total - emitted - reflected).abs() <= 1e-9 * total,
-            "shot {shots}: {total} vs {}",
-            emitted + reflected
+            solver.unshot_fraction() <= 1e-6,
+            "did not converge in {shots} shots"
         );
-        // … and in a closed room every shot's energy arrives somewhere (up to
-        // the vertex-average quadrature of what the elements received, which
-        // is coarse next to the shooter's edges).
-        assert!(
-            (s.received - s.energy).abs() <= 0.1 * s.energy,
-            "shot {shots}: shot {} received {}",
-            s.energy,
-            s.received
-        );
-        // ρ = 0.5 everywhere: half of what arrives is reflected.
-        assert!((s.reflected - 0.5 * s.received).abs() <= 1e-12 * s.received);
-    }
-    assert!(
-        solver.unshot_fraction() <= 1e-6,
-        "did not converge in {shots} shots"
-    );
-    for v in 0..solver.mesh.num_vertices() {
-        let b = solver.radiosity(libmesh::VertId(v as u32));
-        for x in b {
-            assert!((x - 2.0).abs() < 2e-3, "vertex {v}: B = {x}");
+        for v in 0..solver.mesh.num_vertices() {
+            let b = solver.radiosity(libmesh::VertId(v as u32));
+            for x in b {
+                assert!((x - 2.0).abs() < tol, "shape {shape}, vertex {v}: B = {x}");
+            }
         }
     }
 }
