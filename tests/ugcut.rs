@@ -257,3 +257,45 @@ fn a_wall_jittered_by_one_ulp_is_meshed() {
         }
     }
 }
+
+/// Faces a few epsilons wide somewhere (fixtures/cut/thin-strips.ug: a
+/// wall's end 3.3 epsilon wide with its sides' vertices at different
+/// heights, a neck 1.3 epsilon wide between a notch and the opposite side):
+/// every vertex gets a point right across from it, so the strips are cut
+/// across into pieces as wide as they are. Before, the triangles joined a
+/// vertex to points far along the other side: needles 0.02 epsilon wide,
+/// which ugcheck counts as degenerate and ugrad leaves out.
+#[test]
+fn thin_strips_are_cut_across_without_needles() {
+    let input = std::fs::read(fixture("cut/thin-strips.ug")).unwrap();
+    let before = serde_json::from_str::<serde_json::Value>(&run_ok(
+        "ugcheck",
+        &["--json", "-e", "1e-4"],
+        Some(&input),
+    ))
+    .unwrap();
+    let want = before["area_by_material"][0]["area"].as_f64().unwrap();
+    for len in ["0.5", "0.2", "2%", "0.05"] {
+        let out = run_ok("ugcut", &["-e", "1e-4", "-l", len], Some(&input));
+        let r: serde_json::Value = serde_json::from_str(&run_ok(
+            "ugcheck",
+            &["--json", "-e", "1e-4"],
+            Some(out.as_bytes()),
+        ))
+        .unwrap();
+        for key in [
+            "nonpatch",
+            "tvertices",
+            "degenerate",
+            "overlapping",
+            "inconsistent",
+        ] {
+            assert_eq!(count(&r, key), 0, "-l {len}: {key}: {}", r[key]);
+        }
+        let area = r["area_by_material"][0]["area"].as_f64().unwrap();
+        assert!(
+            (area - want).abs() <= 1e-9 * want,
+            "-l {len}: {area} vs {want}"
+        );
+    }
+}

@@ -200,6 +200,26 @@ impl Classes {
     }
 }
 
+/// The least distance from a corner of a polygon to a side not its own.
+fn width(pts: &[DVec3]) -> f64 {
+    let n = pts.len();
+    let mut w = f64::INFINITY;
+    for (i, &x) in pts.iter().enumerate() {
+        for j in 0..n {
+            let k = (j + 1) % n;
+            if j == i || k == i {
+                continue;
+            }
+            let (a, b) = (pts[j], pts[k]);
+            let ab = b - a;
+            let t = ((x - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
+            let d = (x - (a + ab * t)).length();
+            w = w.min(if d.is_nan() { 0.0 } else { d });
+        }
+    }
+    w
+}
+
 fn label(m: &Model, f: FaceId, k: usize) -> String {
     m.faces[f.idx()]
         .name
@@ -261,15 +281,13 @@ impl Mesh {
                 continue;
             }
             let newell = geom::newell_normal(&pts);
-            let (lo, hi) = pts
-                .iter()
-                .fold((pts[0], pts[0]), |(lo, hi), &p| (lo.min(p), hi.max(p)));
-            let size = (hi - lo).length();
             let area = newell.length() / 2.0;
-            if area.is_nan() || area <= eps * size {
+            // Narrower than eps: a corner within eps of a side not its own
+            // (ugcheck's test, so that what ugcheck passes is a patch here).
+            if area.is_nan() || area <= 0.0 || width(&pts) <= eps {
                 degenerate.push((
                     label(m, f, k),
-                    "zero area (its vertices are collinear)".into(),
+                    "zero area (narrower than epsilon: its vertices are nearly collinear)".into(),
                 ));
                 continue;
             }

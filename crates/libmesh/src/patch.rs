@@ -196,6 +196,138 @@ pub fn prepare(m: &Model, eps: f64, stats: &mut Stats) -> Model {
 /// The division points (interior, from the lower vertex id to the higher) of every edge.
 struct Divisions {
     map: FxHashMap<(VertexId, VertexId), Vec<VertexId>>,
+    /// Where the edge must also be divided (parameters from the lower
+    /// vertex id): the feet of the face's own vertices that lie across a
+    /// thin part of it (see [`feet`]).
+    feet: FxHashMap<(VertexId, VertexId), Vec<f64>>,
+}
+
+/// Across this many epsilons a face is thin: a vertex nearer than this to
+/// a boundary edge of its own face (not its own) gets its foot on that
+/// edge as a division point.
+const THIN: f64 = 8.0;
+
+/// The feet of thin parts: for every face, each vertex that lies within
+/// [`THIN`]·`eps` (and more than `eps`) of one of the face's boundary edges,
+/// its foot on that edge if it falls more than 2·`eps` from the edge's ends.
+/// In a strip a few epsilons wide (a wall's end left between two cuts, a
+/// neck between a notch and the opposite side) the triangles can only join
+/// a vertex on one side to points on the other; without a point right
+/// across from it they are needles much narrower than epsilon (a 1 mm step
+/// on one side of a 0.3 mm strip 2.8 m tall gave one 0.01 epsilon wide).
+/// With the feet, the strip is cut across into pieces as wide as it is.
+/// The feet divide the edge for every face that has it, so no T-vertex.
+fn feet(m: &Model, eps: f64) -> FxHashMap<(VertexId, VertexId), Vec<f64>> {
+    let mut out: FxHashMap<(VertexId, VertexId), Vec<f64>> = FxHashMap::default();
+    if eps.is_nan() || eps <= 0.0 {
+        return out;
+    }
+    let reach = THIN * eps;
+    for f in m.top_faces() {
+        let face = &m.faces[f.idx()];
+        let edges: Vec<(VertexId, VertexId)> = face
+            .contours
+            .iter()
+            .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
+            .filter(|(a, b)| a != b)
+            .collect();
+        let index = (edges.len() > 24).then(|| {
+            BoxIndex::new(edges.iter().enumerate().map(|(k, &(a, b))| {
+                let (p, q) = (m.pos(a), m.pos(b));
+                (
+                    p.min(q) - DVec3::splat(reach),
+                    p.max(q) + DVec3::splat(reach),
+                    k as u32,
+                )
+            }))
+        });
+        let mut verts: Vec<VertexId> = face.contours.iter().flatten().copied().collect();
+        verts.sort_unstable();
+        verts.dedup();
+        for &v in &verts {
+            let x = m.pos(v);
+            let near: Vec<usize> = match &index {
+                Some(ix) => ix
+                    .query(x - DVec3::splat(reach), x + DVec3::splat(reach))
+                    .into_iter()
+                    .map(|k| k as usize)
+                    .collect(),
+                None => (0..edges.len()).collect(),
+            };
+            for k in near {
+                let (a, b) = edges[k];
+                if a == v || b == v {
+                    continue;
+                }
+                let key = if a < b { (a, b) } else { (b, a) };
+                let (p, q) = (m.pos(key.0), m.pos(key.1));
+                let l2 = (q - p).length_squared();
+                if l2.is_nan() || l2 <= 0.0 {
+                    continue;
+                }
+                let t = (x - p).dot(q - p) / l2;
+                let l = l2.sqrt();
+                if t * l <= 2.0 * eps || (1.0 - t) * l <= 2.0 * eps {
+                    continue;
+                }
+                let d = (x - (p + (q - p) * t)).length();
+                if d > eps && d <= reach {
+                    out.entry(key).or_default().push(t);
+                }
+            }
+        }
+    }
+    if out.is_empty() {
+        return out;
+    }
+    // A foot within eps of another edge (one nearly along its own, from a
+    // shared end) would be a T-vertex there: it is left out.
+    let mut keys: Vec<(VertexId, VertexId)> = out.keys().copied().collect();
+    keys.sort_unstable();
+    let mut spots: Vec<(usize, usize, DVec3)> = Vec::new();
+    for (i, key) in keys.iter().enumerate() {
+        let (p, q) = (m.pos(key.0), m.pos(key.1));
+        for (j, &t) in out[key].iter().enumerate() {
+            spots.push((i, j, p + (q - p) * t));
+        }
+    }
+    let index = BoxIndex::new(
+        spots
+            .iter()
+            .enumerate()
+            .map(|(k, &(_, _, x))| (x - DVec3::splat(eps), x + DVec3::splat(eps), k as u32)),
+    );
+    let mut drop = vec![false; spots.len()];
+    for f in m.top_faces() {
+        for c in &m.faces[f.idx()].contours {
+            for i in 0..c.len() {
+                let (a, b) = (c[i], c[(i + 1) % c.len()]);
+                if a == b {
+                    continue;
+                }
+                let key = if a < b { (a, b) } else { (b, a) };
+                let (pa, pb) = (m.pos(a), m.pos(b));
+                let ab = pb - pa;
+                for k in index.query(pa.min(pb), pa.max(pb)) {
+                    let (ki, _, x) = spots[k as usize];
+                    if keys[ki] == key {
+                        continue;
+                    }
+                    let u = ((x - pa).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
+                    if (x - (pa + ab * u)).length() <= eps {
+                        drop[k as usize] = true;
+                    }
+                }
+            }
+        }
+    }
+    for (k, &(ki, j, _)) in spots.iter().enumerate().rev() {
+        if drop[k] {
+            out.get_mut(&keys[ki]).unwrap().remove(j);
+        }
+    }
+    out.retain(|_, ts| !ts.is_empty());
+    out
 }
 
 struct Ctx<'m> {
@@ -234,16 +366,38 @@ impl Ctx<'_> {
         let key = if a < b { (a, b) } else { (b, a) };
         if !self.div.map.contains_key(&key) {
             let (p, q) = (self.pos(key.0), self.pos(key.1));
-            let k = segments((q - p).length(), self.opts.len);
+            let l = (q - p).length();
+            let k = segments(l, self.opts.len);
             let base = format!(
                 "{}:{}",
                 self.vertices[key.0.idx()].name,
                 self.vertices[key.1.idx()].name
             );
-            let pts: Vec<VertexId> = (1..k)
-                .map(|i| {
-                    let t = i as f64 / k as f64;
-                    self.new_vertex(format!("{base}.{i}"), p + (q - p) * t)
+            // The equal division, and the feet of thin parts: feet within
+            // 2·eps of each other are one; a division point within a
+            // quarter segment of a foot gives way to it.
+            let mut feet = self.div.feet.remove(&key).unwrap_or_default();
+            feet.sort_by(f64::total_cmp);
+            let gap = 2.0 * self.opts.eps / l;
+            feet.dedup_by(|b, a| *b - *a <= gap);
+            let clear = (0.25 / k as f64).max(gap);
+            let mut ts: Vec<(f64, bool)> = (1..k)
+                .map(|i| i as f64 / k as f64)
+                .filter(|t| feet.iter().all(|f| (f - t).abs() > clear))
+                .map(|t| (t, false))
+                .chain(feet.iter().map(|&t| (t, true)))
+                .collect();
+            ts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let pts: Vec<VertexId> = ts
+                .iter()
+                .enumerate()
+                .map(|(i, &(t, foot))| {
+                    let name = if foot {
+                        format!("{base}.f{}", i + 1)
+                    } else {
+                        format!("{base}.{}", i + 1)
+                    };
+                    self.new_vertex(name, p + (q - p) * t)
                 })
                 .collect();
             self.div.map.insert(key, pts);
@@ -289,6 +443,7 @@ pub fn cut(m: &Model, opts: Options) -> Result<(Model, Stats), String> {
             .collect(),
         div: Divisions {
             map: FxHashMap::default(),
+            feet: feet(m, opts.eps),
         },
     };
     let mut out = Model {

@@ -581,6 +581,25 @@ fn build_errors() {
         d[1].0 == "pinch" && d[1].1.contains("repeats a vertex"),
         "{d:?}"
     );
+    // Narrower than epsilon is ugcheck's test: a corner within eps of a
+    // side not its own. At eps 0.01, a triangle 1.5 eps high over a side
+    // of 10 is a patch (its area is below eps times its size), one 0.9 eps
+    // high is not, nor a needle on a side of 0.005 however long.
+    let m = ug::parse(
+        b"v a 0 0 0; v b 10 0 0; v c 5 0.015 0; v d 5 0.009 0; v e 10 0.005 0;
+          f thin (a b c); f sliver (a b d); f needle (a b e);",
+        "t.ug",
+    )
+    .unwrap()
+    .model;
+    let mesh = Mesh::from_model(&m, 0.01).unwrap();
+    assert_eq!(mesh.num_patches(), 1);
+    let d: Vec<&str> = mesh
+        .degenerate_faces()
+        .iter()
+        .map(|x| x.0.as_str())
+        .collect();
+    assert_eq!(d, ["sliver", "needle"]);
     let e = err(
         "v a 0 0 0; v b 3 0 0; v c 3 3 0; v d 0 3 0; v e 1 1 0; v f 1 2 0; v g 2 1 0;
          f holed (a b c d) (e f g);",
