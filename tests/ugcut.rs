@@ -44,6 +44,20 @@ fn cut(input: &[u8], len: &str) -> (String, [f64; 4]) {
     )
 }
 
+/// ugcheck's report `r` of ugcut's output at `-l len`: only patches, with
+/// no T-vertex, degenerate or overlapping one, consistently oriented.
+fn assert_only_sound_patches(r: &serde_json::Value, len: &str) {
+    for key in [
+        "nonpatch",
+        "tvertices",
+        "degenerate",
+        "overlapping",
+        "inconsistent",
+    ] {
+        assert_eq!(count(r, key), 0, "-l {len}: {key}: {}", r[key]);
+    }
+}
+
 fn assert_good_patches(name: &str, input: &[u8], len: f64) -> String {
     let before = check(std::str::from_utf8(input).unwrap());
     let (out, [min, mean, max, worst]) = cut(input, &len.to_string());
@@ -226,15 +240,7 @@ fn a_wall_jittered_by_one_ulp_is_meshed() {
         );
         let text = String::from_utf8(out.stdout).unwrap();
         let r = check(&text);
-        for key in [
-            "nonpatch",
-            "tvertices",
-            "degenerate",
-            "overlapping",
-            "inconsistent",
-        ] {
-            assert_eq!(count(&r, key), 0, "-l {len}: {key}: {}", r[key]);
-        }
+        assert_only_sound_patches(&r, len);
         let area = r["area_by_material"][0]["area"].as_f64().unwrap();
         let want = (17.986 - 14.9505) * 2.8;
         assert!(
@@ -283,15 +289,7 @@ fn thin_strips_are_cut_across_without_needles() {
             Some(out.as_bytes()),
         ))
         .unwrap();
-        for key in [
-            "nonpatch",
-            "tvertices",
-            "degenerate",
-            "overlapping",
-            "inconsistent",
-        ] {
-            assert_eq!(count(&r, key), 0, "-l {len}: {key}: {}", r[key]);
-        }
+        assert_only_sound_patches(&r, len);
         let area = r["area_by_material"][0]["area"].as_f64().unwrap();
         assert!(
             (area - want).abs() <= 1e-9 * want,

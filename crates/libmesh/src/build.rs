@@ -210,11 +210,7 @@ fn width(pts: &[DVec3]) -> f64 {
             if j == i || k == i {
                 continue;
             }
-            let (a, b) = (pts[j], pts[k]);
-            let ab = b - a;
-            let t = ((x - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
-            let d = (x - (a + ab * t)).length();
-            w = w.min(if d.is_nan() { 0.0 } else { d });
+            w = w.min(geom::point_segment_distance(x, pts[j], pts[k]).0);
         }
     }
     w

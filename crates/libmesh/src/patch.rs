@@ -261,16 +261,12 @@ fn feet(m: &Model, eps: f64) -> FxHashMap<(VertexId, VertexId), Vec<f64>> {
                 }
                 let key = if a < b { (a, b) } else { (b, a) };
                 let (p, q) = (m.pos(key.0), m.pos(key.1));
-                let l2 = (q - p).length_squared();
-                if l2.is_nan() || l2 <= 0.0 {
-                    continue;
-                }
-                let t = (x - p).dot(q - p) / l2;
-                let l = l2.sqrt();
+                // The foot's parameter, clamped: a foot at an end fails the test.
+                let (d, t) = geom::point_segment_distance(x, p, q);
+                let l = (q - p).length();
                 if t * l <= 2.0 * eps || (1.0 - t) * l <= 2.0 * eps {
                     continue;
                 }
-                let d = (x - (p + (q - p) * t)).length();
                 if d > eps && d <= reach {
                     out.entry(key).or_default().push(t);
                 }
@@ -307,14 +303,12 @@ fn feet(m: &Model, eps: f64) -> FxHashMap<(VertexId, VertexId), Vec<f64>> {
                 }
                 let key = if a < b { (a, b) } else { (b, a) };
                 let (pa, pb) = (m.pos(a), m.pos(b));
-                let ab = pb - pa;
                 for k in index.query(pa.min(pb), pa.max(pb)) {
                     let (ki, _, x) = spots[k as usize];
                     if keys[ki] == key {
                         continue;
                     }
-                    let u = ((x - pa).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
-                    if (x - (pa + ab * u)).length() <= eps {
+                    if geom::point_segment_distance(x, pa, pb).0 <= eps {
                         drop[k as usize] = true;
                     }
                 }

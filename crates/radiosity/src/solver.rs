@@ -1070,18 +1070,10 @@ impl<'v> Solver<'v> {
             if iterations == 0
                 && let Some(t) = &tshape
             {
-                let mesh = &self.mesh;
-                let leaf_shot = &self.leaf_shot;
-                let ff = |p: u32, x: DVec3, n: DVec3| {
-                    let cells =
-                        tail_cells(mesh, leaf_shot, &t.snap, PatchId(p), t.ubar[p as usize])?;
-                    Some(shaped_form_factor(x, n, &cells, SHAPE_DEPTH))
-                };
+                let ff = tail_shapes(&self.mesh, &self.leaf_shot, t, None);
                 let near = crate::tail::Near {
                     ff: &ff,
                     first: &t.first,
-                    rest: None,
-                    both: None,
                 };
                 let corr = tr.first_bounce_correction(&near);
                 for (h, c) in dh.iter_mut().zip(corr) {
@@ -1110,20 +1102,17 @@ impl<'v> Solver<'v> {
         let t2 = Instant::now();
         tr.compact_rows();
         let corners = {
-            let mesh = &self.mesh;
-            let leaf_shot = &self.leaf_shot;
-            let ff = |p: u32, x: DVec3, n: DVec3| {
-                let t = tshape.as_ref()?;
-                let cells = tail_cells(mesh, leaf_shot, &t.snap, PatchId(p), t.ubar[p as usize])?;
-                Some(shaped_form_factor(x, n, &cells, SHAPE_DEPTH))
-            };
-            let near = tshape.as_ref().map(|t| crate::tail::Near {
-                ff: &ff,
-                first: &t.first,
-                rest: None,
-                both: None,
-            });
-            tr.corners(mesh, &shot_b, near.as_ref(), &cancel)
+            let ff = tshape
+                .as_ref()
+                .map(|t| tail_shapes(&self.mesh, &self.leaf_shot, t, None));
+            let near = tshape
+                .as_ref()
+                .zip(ff.as_ref())
+                .map(|(t, ff)| crate::tail::Near {
+                    ff,
+                    first: &t.first,
+                });
+            tr.corners(&self.mesh, &shot_b, near.as_ref(), &cancel)
         };
         let Some((recv, total)) = corners else {
             self.tail = Some(TailStats {
@@ -1190,24 +1179,14 @@ impl<'v> Solver<'v> {
         // The later bounces shaped near each patch as the tail's light now
         // lies on it: a second pass over the corners, near patches only.
         if let Some(t) = &tshape {
-            let mesh = &self.mesh;
-            let leaf_shot = &self.leaf_shot;
-            let ff = |p: u32, x: DVec3, n: DVec3| {
-                let cells = tail_cells(mesh, leaf_shot, &t.snap, PatchId(p), t.ubar[p as usize])?;
-                Some(shaped_form_factor(x, n, &cells, SHAPE_DEPTH))
+            let corr = {
+                let ff = tail_shapes(&self.mesh, &self.leaf_shot, t, Some(&t_all));
+                let near = crate::tail::Near {
+                    ff: &ff,
+                    first: &t.first,
+                };
+                tr.rest_corrections(&self.mesh, &recv, &shot_b, &near)
             };
-            let tref = &t_all;
-            let rest = |p: u32, x: DVec3, n: DVec3| {
-                let cells = rest_cells(mesh, tref, PatchId(p))?;
-                Some(shaped_form_factor(x, n, &cells, SHAPE_DEPTH))
-            };
-            let near = crate::tail::Near {
-                ff: &ff,
-                first: &t.first,
-                rest: Some(&rest),
-                both: None,
-            };
-            let corr = tr.rest_corrections(mesh, &recv, &shot_b, &near);
             for (x, c) in total.iter_mut().zip(corr) {
                 for k in 0..3 {
                     x[k] = (x[k] + c[k]).max(0.0);
@@ -1367,40 +1346,21 @@ impl<'v> Solver<'v> {
             }
             let dirs = self.inward(&ids);
             let mesh = &self.mesh;
-            let leaf_shot = &self.leaf_shot;
-            let ff = |p: u32, x: DVec3, n: DVec3| {
-                let t = tshape?;
-                let cells = tail_cells(mesh, leaf_shot, &t.snap, PatchId(p), t.ubar[p as usize])?;
-                Some(shaped_form_factor(x, n, &cells, SHAPE_DEPTH))
+            let got: Vec<Rgb> = {
+                let ff = tshape.map(|t| tail_shapes(mesh, &self.leaf_shot, t, Some(t_all)));
+                let near = tshape.zip(ff.as_ref()).map(|(t, ff)| crate::tail::Near {
+                    ff,
+                    first: &t.first,
+                });
+                let near = near.as_ref();
+                ids.par_iter()
+                    .zip(&dirs)
+                    .map(|(&v, &inward)| {
+                        let size = tr.patch_size(libmesh::PatchId(patch_of[v.idx()]));
+                        tr.at(mesh, v, inward, size, &[patch_of[v.idx()]], shot_b, near)
+                    })
+                    .collect()
             };
-            let tref: &[Rgb] = t_all;
-            let rest = |p: u32, x: DVec3, n: DVec3| {
-                let cells = rest_cells(mesh, tref, PatchId(p))?;
-                Some(shaped_form_factor(x, n, &cells, SHAPE_DEPTH))
-            };
-            let both = |p: u32, x: DVec3, n: DVec3| {
-                let Some(t) = tshape else {
-                    return (None, None);
-                };
-                let a = tail_cells(mesh, leaf_shot, &t.snap, PatchId(p), t.ubar[p as usize]);
-                let b = rest_cells(mesh, tref, PatchId(p));
-                shaped_pair(x, n, a.as_deref(), b.as_deref())
-            };
-            let near = tshape.map(|t| crate::tail::Near {
-                ff: &ff,
-                first: &t.first,
-                rest: Some(&rest),
-                both: Some(&both),
-            });
-            let near = near.as_ref();
-            let got: Vec<Rgb> = ids
-                .par_iter()
-                .zip(&dirs)
-                .map(|(&v, &inward)| {
-                    let size = tr.patch_size(libmesh::PatchId(patch_of[v.idx()]));
-                    tr.at(mesh, v, inward, size, &[patch_of[v.idx()]], shot_b, near)
-                })
-                .collect();
             gathered += ids.len();
             for (&v, t) in ids.iter().zip(got) {
                 let i = v.idx();
@@ -1507,40 +1467,22 @@ impl<'v> Solver<'v> {
             let dirs = self.inward(&ids);
             let mesh = &self.mesh;
             let patch_of = &patch_of;
-            let leaf_shot = &self.leaf_shot;
-            let ff = |p: u32, x: DVec3, n: DVec3| {
-                let t = tshape?;
-                let cells = tail_cells(mesh, leaf_shot, &t.snap, PatchId(p), t.ubar[p as usize])?;
-                Some(shaped_form_factor(x, n, &cells, SHAPE_DEPTH))
+            let got: Vec<Rgb> = {
+                let ff = tshape.map(|t| tail_shapes(mesh, &self.leaf_shot, t, Some(t_all)));
+                let near = tshape.zip(ff.as_ref()).map(|(t, ff)| crate::tail::Near {
+                    ff,
+                    first: &t.first,
+                });
+                let near = near.as_ref();
+                fresh
+                    .par_iter()
+                    .map(|&(v, e)| {
+                        let inward = dirs[ids.binary_search(&v).expect("a fresh vertex")];
+                        let size = tr.patch_size(mesh.elem_patch(e));
+                        tr.at(mesh, v, inward, size, &[patch_of[v.idx()]], shot_b, near)
+                    })
+                    .collect()
             };
-            let tref: &[Rgb] = t_all;
-            let rest = |p: u32, x: DVec3, n: DVec3| {
-                let cells = rest_cells(mesh, tref, PatchId(p))?;
-                Some(shaped_form_factor(x, n, &cells, SHAPE_DEPTH))
-            };
-            let both = |p: u32, x: DVec3, n: DVec3| {
-                let Some(t) = tshape else {
-                    return (None, None);
-                };
-                let a = tail_cells(mesh, leaf_shot, &t.snap, PatchId(p), t.ubar[p as usize]);
-                let b = rest_cells(mesh, tref, PatchId(p));
-                shaped_pair(x, n, a.as_deref(), b.as_deref())
-            };
-            let near = tshape.map(|t| crate::tail::Near {
-                ff: &ff,
-                first: &t.first,
-                rest: Some(&rest),
-                both: Some(&both),
-            });
-            let near = near.as_ref();
-            let got: Vec<Rgb> = fresh
-                .par_iter()
-                .map(|&(v, e)| {
-                    let inward = dirs[ids.binary_search(&v).expect("a fresh vertex")];
-                    let size = tr.patch_size(mesh.elem_patch(e));
-                    tr.at(mesh, v, inward, size, &[patch_of[v.idx()]], shot_b, near)
-                })
-                .collect();
             gathered += fresh.len();
             for (&(v, _), t) in fresh.iter().zip(got) {
                 set_tail(&mut self.h, t_all, v.idx(), t);
@@ -3084,6 +3026,22 @@ fn cells_of(
         })
         .collect();
     (!uniform).then_some(cells)
+}
+
+/// The tail's shaped form factors (see [`crate::tail::Near`]) over the
+/// cells of its first bounce and, given the tail's light at every vertex
+/// (`rest`), of its later bounces.
+fn tail_shapes<'a>(
+    mesh: &'a Mesh,
+    leaf_shot: &'a [[f32; 4]],
+    t: &'a TailShape,
+    rest: Option<&'a [Rgb]>,
+) -> impl Fn(u32, DVec3, DVec3) -> (Option<f64>, Option<f64>) + Sync + 'a {
+    move |p, x, n| {
+        let a = tail_cells(mesh, leaf_shot, &t.snap, PatchId(p), t.ubar[p as usize]);
+        let b = rest.and_then(|r| rest_cells(mesh, r, PatchId(p)));
+        shaped_pair(x, n, a.as_deref(), b.as_deref())
+    }
 }
 
 /// The form factors weighted by two shapes of one patch (either absent:

@@ -74,22 +74,19 @@ use crate::formfactor::{offset_receiver, point_to_polygon, receives};
 
 type Rgb = [f64; 3];
 
-/// Two shaped form factors of one patch at a point (see [`Near::both`]).
+/// The shaped form factors of one patch at a point (see [`Near`]).
 pub type ShapedPair<'a> = dyn Fn(u32, DVec3, DVec3) -> (Option<f64>, Option<f64>) + Sync + 'a;
 
-/// The light of the tail's first bounce shaped as it lies on each patch:
-/// for a receiver near patch `p` (at `x`, normal `n`), the form factor
-/// weighted by the patch's unshot radiosity relative to its mean (`None`
-/// where that is uniform), and per patch the radiosity of that first bounce.
+/// The tail's light shaped as it lies on each patch: for a receiver near
+/// patch `p` (at `x`, normal `n`), `ff` gives the form factor weighted by
+/// the first bounce (the patch's unshot radiosity at the tail's start,
+/// relative to its mean) and, once the corners have gathered, the one
+/// weighted by the later bounces (the tail's own light); `None` where the
+/// light is uniform or not known. `first`: per patch, the radiosity of the
+/// first bounce.
 pub struct Near<'a> {
-    pub ff: &'a (dyn Fn(u32, DVec3, DVec3) -> Option<f64> + Sync),
+    pub ff: &'a ShapedPair<'a>,
     pub first: &'a [Rgb],
-    /// The later bounces shaped too, as the tail's own light lies on each
-    /// patch (known once its corners have gathered): the same for them.
-    pub rest: Option<&'a (dyn Fn(u32, DVec3, DVec3) -> Option<f64> + Sync)>,
-    /// `ff` and `rest` at once, sharing the geometry (where both are
-    /// given, the gathers take this).
-    pub both: Option<&'a ShapedPair<'a>>,
 }
 
 /// Receivers nearer a patch's centre than this many patch sizes take its
@@ -535,7 +532,7 @@ impl Transport {
                     if x.distance_squared(sh.centre) >= (NEAR * sh.size).powi(2) {
                         continue;
                     }
-                    let Some(f) = (near.ff)(p, x, r.n) else {
+                    let Some(f) = (near.ff)(p, x, r.n).0 else {
                         continue;
                     };
                     let d = f - self.weight[k] as f64;
@@ -596,17 +593,8 @@ impl Transport {
             let part: Vec<Rgb> = chunk
                 .par_iter()
                 .map(|&v| {
-                    let x = mesh.receiver_pos(v);
                     let patches = &at[count[v.idx()] as usize..count[v.idx() + 1] as usize];
-                    let inward = patches
-                        .iter()
-                        .map(|&p| (self.shooters[p as usize].centre - x).normalize_or_zero())
-                        .sum::<DVec3>()
-                        .normalize_or_zero();
-                    let size = patches
-                        .iter()
-                        .map(|&p| self.shooters[p as usize].size)
-                        .fold(0.0, f64::max);
+                    let (inward, size) = self.corner_frame(mesh.receiver_pos(v), patches);
                     self.at(mesh, v, inward, size, patches, s, near)
                 })
                 .collect();
@@ -627,17 +615,8 @@ impl Transport {
         let (count, at) = patches_at_corners(mesh);
         recv.par_iter()
             .map(|&v| {
-                let x = mesh.receiver_pos(v);
                 let patches = &at[count[v.idx()] as usize..count[v.idx() + 1] as usize];
-                let inward = patches
-                    .iter()
-                    .map(|&p| (self.shooters[p as usize].centre - x).normalize_or_zero())
-                    .sum::<DVec3>()
-                    .normalize_or_zero();
-                let size = patches
-                    .iter()
-                    .map(|&p| self.shooters[p as usize].size)
-                    .fold(0.0, f64::max);
+                let (inward, size) = self.corner_frame(mesh.receiver_pos(v), patches);
                 self.rest_correction(mesh, v, inward, size, patches, s, near)
             })
             .collect()
@@ -675,6 +654,54 @@ impl Transport {
         self.weight = Vec::new();
     }
 
+    /// Mesh vertex `v` as a receiver (see [`Transport::at`]), and the
+    /// patches to try for it: those seen from the patch centres `at`
+    /// around it, when they all lie on its own surface (a vertex stitched
+    /// onto a neighbour's edge may be named by that neighbour's element),
+    /// else those its rays find.
+    fn vertex_receiver(
+        &self,
+        mesh: &Mesh,
+        v: VertId,
+        inward: DVec3,
+        size: f64,
+        at: &[u32],
+    ) -> (Receiver, Vec<u32>) {
+        let r = Receiver {
+            x: mesh.receiver_pos(v),
+            n: mesh.vertex_normal(v),
+            surface: mesh.vertex_surface(v).0,
+            inward,
+            size,
+            seed: mix(v.0 as u64),
+        };
+        let cand = if self.seen_start.is_empty()
+            || !at
+                .iter()
+                .all(|&p| self.surf.get(p as usize) == Some(&r.surface))
+        {
+            self.candidates(&r)
+        } else {
+            self.near_candidates(at)
+        };
+        (r, cand)
+    }
+
+    /// A patch corner's inward direction (towards the centres of the
+    /// patches `at` it is a corner of) and size (their longest edge).
+    fn corner_frame(&self, x: DVec3, at: &[u32]) -> (DVec3, f64) {
+        let inward = at
+            .iter()
+            .map(|&p| (self.shooters[p as usize].centre - x).normalize_or_zero())
+            .sum::<DVec3>()
+            .normalize_or_zero();
+        let size = at
+            .iter()
+            .map(|&p| self.shooters[p as usize].size)
+            .fold(0.0, f64::max);
+        (inward, size)
+    }
+
     /// The irradiance at the mesh vertex `v` from patches of radiosity `s`
     /// (a patch corner, or a vertex made by the refinement after the tail):
     /// its row, computed, used and dropped. `inward` points from `v` into
@@ -692,25 +719,7 @@ impl Transport {
         s: &[Rgb],
         near: Option<&Near>,
     ) -> Rgb {
-        let r = Receiver {
-            x: mesh.receiver_pos(v),
-            n: mesh.vertex_normal(v),
-            surface: mesh.vertex_surface(v).0,
-            inward,
-            size,
-            seed: mix(v.0 as u64),
-        };
-        // Hints on the vertex's own surface only (a vertex stitched onto a
-        // neighbour's edge may be named by that neighbour's element).
-        let cand = if self.seen_start.is_empty()
-            || !at
-                .iter()
-                .all(|&p| self.surf.get(p as usize) == Some(&r.surface))
-        {
-            self.candidates(&r)
-        } else {
-            self.near_candidates(at)
-        };
+        let (r, cand) = self.vertex_receiver(mesh, v, inward, size, at);
         let row = self.row(&r, cand);
         let mut h = [0.0; 3];
         for (p, w) in row {
@@ -736,13 +745,8 @@ impl Transport {
         if x.distance_squared(sh.centre) >= (NEAR * sh.size).powi(2) {
             return (w, w);
         }
-        if let Some(both) = nr.both {
-            let (fu, fr) = both(p, x, r.n);
-            return (fu.unwrap_or(w), fr.unwrap_or(w));
-        }
-        let fu = (nr.ff)(p, x, r.n).unwrap_or(w);
-        let fr = nr.rest.and_then(|f| f(p, x, r.n)).unwrap_or(w);
-        (fu, fr)
+        let (fu, fr) = (nr.ff)(p, x, r.n);
+        (fu.unwrap_or(w), fr.unwrap_or(w))
     }
 
     /// What shaping the later bounces changes at mesh vertex `v` (see
@@ -760,26 +764,7 @@ impl Transport {
         s: &[Rgb],
         near: &Near,
     ) -> Rgb {
-        let Some(rest) = near.rest else {
-            return [0.0; 3];
-        };
-        let r = Receiver {
-            x: mesh.receiver_pos(v),
-            n: mesh.vertex_normal(v),
-            surface: mesh.vertex_surface(v).0,
-            inward,
-            size,
-            seed: mix(v.0 as u64),
-        };
-        let cand = if self.seen_start.is_empty()
-            || !at
-                .iter()
-                .all(|&p| self.surf.get(p as usize) == Some(&r.surface))
-        {
-            self.candidates(&r)
-        } else {
-            self.near_candidates(at)
-        };
+        let (r, cand) = self.vertex_receiver(mesh, v, inward, size, at);
         let cand: Vec<u32> = cand
             .into_iter()
             .filter(|&p| {
@@ -794,7 +779,7 @@ impl Transport {
             if x.distance_squared(sh.centre) >= (NEAR * sh.size).powi(2) {
                 continue;
             }
-            let Some(f) = rest(p, x, r.n) else {
+            let Some(f) = (near.ff)(p, x, r.n).1 else {
                 continue;
             };
             let (b, u) = (s[p as usize], near.first[p as usize]);
