@@ -426,8 +426,23 @@ const SLAB_FAR: f64 = 1.0 + 2.0 * (3.0 * f64::EPSILON / 2.0) / (1.0 - 3.0 * f64:
 /// [`slab`] with the entry parameter: `Some(t)` (the first t ≥ `tmin` in
 /// the box) when the ray meets the box for some t in [tmin, tmax]
 /// (conservatively: a box met only within rounding counts as met).
-#[inline]
+#[inline(always)]
 pub fn slab_entry(lo: DVec3, hi: DVec3, o: DVec3, inv: DVec3, tmin: f64, tmax: f64) -> Option<f64> {
+    if inv.is_finite() {
+        return slab_entry_finite(lo, hi, o, inv, tmin, tmax);
+    }
+    slab_entry_general(lo, hi, o, inv, tmin, tmax)
+}
+
+/// [`slab_entry`] for any ray (a component of `inv` may be infinite).
+fn slab_entry_general(
+    lo: DVec3,
+    hi: DVec3,
+    o: DVec3,
+    inv: DVec3,
+    tmin: f64,
+    tmax: f64,
+) -> Option<f64> {
     let (mut tn, mut tf) = (tmin, tmax);
     for k in 0..3 {
         let a = (lo[k] - o[k]) * inv[k];
@@ -443,12 +458,54 @@ pub fn slab_entry(lo: DVec3, hi: DVec3, o: DVec3, inv: DVec3, tmin: f64, tmax: f
         tn = tn.max(a.min(b));
         // (Widened either side of 0; ±∞, from a ray parallel to the slab,
         // stays as it is.)
-        tf = tf.min(if far > 0.0 {
-            far * SLAB_FAR
-        } else {
-            far / SLAB_FAR
-        });
+        tf = tf.min(widen(far));
     }
+    (tn <= tf).then_some(tn)
+}
+
+/// A slab's far parameter widened by [`SLAB_FAR`] away from the near end.
+#[inline(always)]
+fn widen(far: f64) -> f64 {
+    if far > 0.0 {
+        far * SLAB_FAR
+    } else {
+        far / SLAB_FAR
+    }
+}
+
+/// [`slab_entry`] for a ray with a finite `inv` (no component of the
+/// direction zero): no product is NaN, so plain comparisons take the
+/// place of `f64::min`'s NaN handling and the three axes need no branch.
+/// The same result, bit for bit (min and max of numbers are exact in any
+/// order); the box test is most of a ray's cost in a large model (the
+/// enclosed-face rays of `ugclean` on the 100k building: about 70%).
+#[inline(always)]
+fn slab_entry_finite(
+    lo: DVec3,
+    hi: DVec3,
+    o: DVec3,
+    inv: DVec3,
+    tmin: f64,
+    tmax: f64,
+) -> Option<f64> {
+    #[inline(always)]
+    fn lt_min(a: f64, b: f64) -> f64 {
+        if a < b { a } else { b }
+    }
+    #[inline(always)]
+    fn gt_max(a: f64, b: f64) -> f64 {
+        if a > b { a } else { b }
+    }
+    let a = (lo - o) * inv;
+    let b = (hi - o) * inv;
+    let near = [lt_min(a.x, b.x), lt_min(a.y, b.y), lt_min(a.z, b.z)];
+    let far = [
+        widen(gt_max(a.x, b.x)),
+        widen(gt_max(a.y, b.y)),
+        widen(gt_max(a.z, b.z)),
+    ];
+    let tn = gt_max(gt_max(tmin, near[0]), gt_max(near[1], near[2]));
+    let tf = lt_min(lt_min(tmax, far[0]), lt_min(far[1], far[2]));
     (tn <= tf).then_some(tn)
 }
 
@@ -744,5 +801,63 @@ mod slab_tests {
             0.0,
             0.5
         ));
+    }
+
+    /// The branch-free box test gives the general one's answers bit for bit,
+    /// on boxes the rays meet, miss and graze (origins on a box's faces and
+    /// rays through its edges included).
+    #[test]
+    fn finite_slab_test_matches_the_general_one() {
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rnd = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut met, mut missed) = (0, 0);
+        for _ in 0..200_000 {
+            let lo = DVec3::new(rnd(), rnd(), rnd()) * 4.0 - 2.0;
+            let hi = lo + DVec3::new(rnd(), rnd(), rnd()) * 2.0;
+            let mut o = DVec3::new(rnd(), rnd(), rnd()) * 8.0 - 4.0;
+            // Now and then on a face or at a corner of the box.
+            if rnd() < 0.2 {
+                o.x = lo.x;
+            }
+            if rnd() < 0.1 {
+                o.y = hi.y;
+            }
+            let to = if rnd() < 0.5 {
+                // Toward a point of the box's boundary.
+                DVec3::new(lo.x, hi.y, lo.z + rnd() * (hi.z - lo.z))
+            } else {
+                DVec3::new(rnd(), rnd(), rnd()) * 8.0 - 4.0
+            };
+            let d = (to - o).normalize();
+            if !d.is_finite() || d.x == 0.0 || d.y == 0.0 || d.z == 0.0 {
+                continue;
+            }
+            let inv = DVec3::ONE / d;
+            let (tmin, tmax) = (
+                rnd() * 0.1,
+                if rnd() < 0.5 {
+                    f64::INFINITY
+                } else {
+                    rnd() * 6.0
+                },
+            );
+            let a = slab_entry_finite(lo, hi, o, inv, tmin, tmax);
+            let b = slab_entry_general(lo, hi, o, inv, tmin, tmax);
+            assert_eq!(
+                a.map(f64::to_bits),
+                b.map(f64::to_bits),
+                "{lo} {hi} {o} {d}"
+            );
+            if a.is_some() { met += 1 } else { missed += 1 }
+        }
+        assert!(
+            met > 10_000 && missed > 10_000,
+            "{met} met, {missed} missed"
+        );
     }
 }
