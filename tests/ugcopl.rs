@@ -273,3 +273,33 @@ f above (q0 q1 q2 q3) white;",
     }
     assert_eq!(defects(&check(&cut)), 0);
 }
+
+/// The pair search restricted to some faces (what `ugcopl`'s later rounds
+/// use) finds exactly the pairs of the full search with a marked face, on a
+/// dirty building after ugisect (thousands of coplanar pairs).
+#[test]
+fn pairs_among_marked_faces_are_the_full_search_filtered() {
+    let cad = building::Cad {
+        storeys: 1,
+        rooms_x: 2,
+        rooms_y: 1,
+        ..building::Cad::default()
+    };
+    let m = building::cad(&cad, 3);
+    let eps = cli::epsilon(None, &m);
+    let (cut, _) = clean::isect::isect(&m, eps).expect("isect");
+    let (_, geoms) = check::face_geoms(&cut);
+    let all = check::coplanar_pairs(&geoms, eps);
+    assert!(all.len() > 100, "{} pairs", all.len());
+    for stride in [1, 3, 17] {
+        let among: Vec<bool> = (0..geoms.len()).map(|k| k % stride == 0).collect();
+        let some = check::coplanar_pairs_with(&geoms, eps, Some(&among));
+        let want: Vec<_> = all
+            .iter()
+            .filter(|p| among[p.0] || among[p.1])
+            .cloned()
+            .collect();
+        assert_eq!(some, want, "every {stride}th face marked");
+    }
+    assert_eq!(check::coplanar_pairs_with(&geoms, eps, None), all);
+}

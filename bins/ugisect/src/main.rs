@@ -37,8 +37,8 @@ fn main() -> std::process::ExitCode {
             );
         }
         c.verbose(format!(
-            "epsilon {eps:e}; {} intersecting pairs, {} cut segments; {} faces cut into {} pieces ({} cuts extended); {} new vertices; {} T-vertices inserted; {} round(s)",
-            st.pairs, st.segments, st.faces_cut, st.pieces, st.extensions, st.new_vertices, st.tvertices, st.rounds
+            "epsilon {eps:e}; {} intersecting pairs, {} cut segments; {} faces cut into {} pieces ({} cuts extended); {} new vertices; {} T-vertices inserted; {} round(s); {} faces bent off their plane by welding, folded into triangles",
+            st.pairs, st.segments, st.faces_cut, st.pieces, st.extensions, st.new_vertices, st.tvertices, st.rounds, st.folded
         ));
         Ok(out)
     })

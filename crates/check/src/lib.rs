@@ -772,13 +772,24 @@ pub enum PairKind {
 /// degenerate face, which takes part in no pair. In order of (i, j), the same
 /// at any thread count.
 pub fn classify_pairs(geoms: &[Option<FaceGeom>], eps: f64) -> Vec<(usize, usize, PairKind)> {
-    classify(geoms, eps, Want::All)
+    classify(geoms, eps, Want::All, None)
 }
 
 /// The coplanar pairs only (overlapping, coincident, back to back: what
 /// `ugcopl` and `ugclean` act on); other pairs are not looked at.
 pub fn coplanar_pairs(geoms: &[Option<FaceGeom>], eps: f64) -> Vec<(usize, usize, PairKind)> {
-    classify(geoms, eps, Want::Coplanar)
+    classify(geoms, eps, Want::Coplanar, None)
+}
+
+/// [`coplanar_pairs`], and with `among` (per face) only the pairs with at
+/// least one face marked: the neighbourhood of a few faces in a large
+/// model. The same pairs, in the same order, as [`coplanar_pairs`] filtered.
+pub fn coplanar_pairs_with(
+    geoms: &[Option<FaceGeom>],
+    eps: f64,
+    among: Option<&[bool]>,
+) -> Vec<(usize, usize, PairKind)> {
+    classify(geoms, eps, Want::Coplanar, among)
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -791,14 +802,20 @@ enum Want {
 /// The intersecting pairs only (what `ugisect` cuts): coplanar pairs are
 /// not measured.
 pub fn intersecting_pairs(geoms: &[Option<FaceGeom>], eps: f64) -> Vec<(usize, usize)> {
-    classify(geoms, eps, Want::Intersecting)
+    classify(geoms, eps, Want::Intersecting, None)
         .into_iter()
         .filter(|p| p.2 == PairKind::Intersect)
         .map(|(i, j, _)| (i, j))
         .collect()
 }
 
-fn classify(geoms: &[Option<FaceGeom>], eps: f64, want: Want) -> Vec<(usize, usize, PairKind)> {
+fn classify(
+    geoms: &[Option<FaceGeom>],
+    eps: f64,
+    want: Want,
+    among: Option<&[bool]>,
+) -> Vec<(usize, usize, PairKind)> {
+    let marked = |k: u32| among.is_none_or(|a| a.get(k as usize).copied().unwrap_or(false));
     let boxes: Vec<(DVec3, DVec3, u32)> = geoms
         .iter()
         .enumerate()
@@ -810,17 +827,24 @@ fn classify(geoms: &[Option<FaceGeom>], eps: f64, want: Want) -> Vec<(usize, usi
         })
         .collect();
     let index = BoxIndex::new(boxes.iter().copied());
-    let per: Vec<Vec<(usize, usize, PairKind)>> = boxes
+    // With `among`, each pair is found from a marked face (the lower one
+    // when both are marked).
+    let from: Vec<(DVec3, DVec3, u32)> = boxes.iter().copied().filter(|b| marked(b.2)).collect();
+    let per: Vec<Vec<(usize, usize, PairKind)>> = from
         .par_iter()
-        .map(|&(lo, hi, i)| {
+        .map(|&(lo, hi, me)| {
             let mut out = Vec::new();
-            let ga = geoms[i as usize]
-                .as_ref()
-                .expect("indexed faces have geometry");
-            for j in index.query(lo, hi) {
-                if j <= i {
+            for other in index.query(lo, hi) {
+                let (i, j) = if other > me {
+                    (me, other)
+                } else if other < me && !marked(other) {
+                    (other, me)
+                } else {
                     continue;
-                }
+                };
+                let ga = geoms[i as usize]
+                    .as_ref()
+                    .expect("indexed faces have geometry");
                 let gb = geoms[j as usize]
                     .as_ref()
                     .expect("indexed faces have geometry");
@@ -899,7 +923,11 @@ fn classify(geoms: &[Option<FaceGeom>], eps: f64, want: Want) -> Vec<(usize, usi
             out
         })
         .collect();
-    per.into_iter().flatten().collect()
+    let mut all: Vec<(usize, usize, PairKind)> = per.into_iter().flatten().collect();
+    if among.is_some() {
+        all.sort_by_key(|p| (p.0, p.1));
+    }
+    all
 }
 
 fn pairs(cx: &Ctx<'_>, geoms: &[Option<FaceGeom>]) -> PairLists {

@@ -55,6 +55,11 @@ pub struct Stats {
     pub tvertices: usize,
     /// Contact pairs (a face and a parallel face a small gap in front of it).
     pub contacts: usize,
+    /// Faces that the welding of new vertices (within epsilon) bent off
+    /// their plane by more than epsilon, folded into triangles at the end.
+    pub folded: usize,
+    /// Rounds of cutting (pairs looked for again after each).
+    pub rounds: usize,
 }
 
 /// The default contact ratio: a parallel face in front of another is a
@@ -276,9 +281,87 @@ fn ring(outer: &[geom::DVec2], delta: f64) -> Option<Vec<geom::DVec2>> {
 /// along the outlines of the parallel faces lying in front of it at most
 /// `contact` times their size (√area) away (see the module's "Contact
 /// cuts"; 0: none).
+///
+/// Like `ugisect`, in rounds (at most [`MAX_ROUNDS`]; the later ones
+/// without contact cuts) until a round finds no overlapping pair: welding
+/// the new vertices (within `eps`) can bend a face off its plane, and it is
+/// folded into triangles, which may overlap a face the bent one was not
+/// found to overlap (a non-planar face takes part in no pair); and a cut
+/// can leave a piece overlapping what the whole face did not. A later
+/// round looks only at the pairs with a face that the round before did not
+/// have as it is (same material, same points in the same order): two faces
+/// it had were looked at then. On the 100k CAD building the first round
+/// folds 7 faces and leaves 16 overlapping pairs, the second none.
 pub fn copl_contact(m: &Model, eps: f64, contact: f64) -> Result<(Model, Stats), ug::Diagnostic> {
+    let (mut out, mut stats) = copl_once(m, eps, contact, None)?;
+    let mut rounds = 1;
+    let mut last = stats.pairs + stats.contacts;
+    let mut before: rustc_hash::FxHashSet<u64> = face_keys(m).into_iter().flatten().collect();
+    while last > 0 && rounds < MAX_ROUNDS {
+        let now = face_keys(&out);
+        let among: Vec<bool> = now
+            .iter()
+            .map(|k| k.is_none_or(|k| !before.contains(&k)))
+            .collect();
+        let (next, st) = copl_once(&out, eps, 0.0, Some(&among))?;
+        before = now.into_iter().flatten().collect();
+        rounds += 1;
+        last = st.pairs;
+        if st.pairs == 0 {
+            break;
+        }
+        stats.faces_cut += st.faces_cut;
+        stats.pieces += st.pieces;
+        stats.new_vertices += st.new_vertices;
+        stats.tvertices += st.tvertices;
+        stats.folded += st.folded;
+        out = next;
+    }
+    stats.rounds = rounds;
+    Ok((out, stats))
+}
+
+/// Most rounds of [`copl_contact`].
+pub const MAX_ROUNDS: usize = 3;
+
+/// Per face (by `FaceId` index; `None` for faces that are not top-level):
+/// a hash of its material and its points' bits in order.
+fn face_keys(m: &Model) -> Vec<Option<u64>> {
+    use std::hash::{BuildHasher, Hash, Hasher};
+    let mut keys = vec![None; m.faces.len()];
+    for f in m.top_faces() {
+        let face = &m.faces[f.idx()];
+        let mut h = rustc_hash::FxBuildHasher.build_hasher();
+        face.material.map(|x| x.idx()).hash(&mut h);
+        for c in &face.contours {
+            c.len().hash(&mut h);
+            for &v in c {
+                for x in m.pos(v).to_array() {
+                    x.to_bits().hash(&mut h);
+                }
+            }
+        }
+        keys[f.idx()] = Some(h.finish());
+    }
+    keys
+}
+
+/// One round of [`copl_contact`]; with `among` (by `FaceId` index), only
+/// the overlapping pairs with a face marked.
+fn copl_once(
+    m: &Model,
+    eps: f64,
+    contact: f64,
+    among: Option<&[bool]>,
+) -> Result<(Model, Stats), ug::Diagnostic> {
     let (faces, geoms) = face_geoms(m);
-    let pairs: Vec<(usize, usize)> = check::coplanar_pairs(&geoms, eps)
+    let among: Option<Vec<bool>> = among.map(|a| {
+        faces
+            .iter()
+            .map(|f| a.get(f.idx()).copied().unwrap_or(true))
+            .collect()
+    });
+    let pairs: Vec<(usize, usize)> = check::coplanar_pairs_with(&geoms, eps, among.as_deref())
         .into_iter()
         .filter(|p| matches!(p.2, PairKind::Overlap(_)))
         .map(|(i, j, _)| (i, j))
@@ -416,5 +499,7 @@ pub fn copl_contact(m: &Model, eps: f64, contact: f64) -> Result<(Model, Stats),
     };
     let (out, vst) = crate::group::vlmerge(rb.out, &opts)?;
     stats.tvertices = vst.tvertices;
+    let (out, folded) = crate::planar::refold(out, eps);
+    stats.folded = folded;
     Ok((out, stats))
 }

@@ -52,6 +52,9 @@ pub struct Stats {
     pub rounds: usize,
     /// Non-planar faces folded into triangles first.
     pub tessellated: usize,
+    /// Faces that the welding of new vertices (within epsilon) bent off
+    /// their plane by more than epsilon, folded into triangles at the end.
+    pub folded: usize,
 }
 
 /// Most rounds of cutting: a cut can leave a piece that meets another face
@@ -80,6 +83,7 @@ pub fn isect(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
         stats.tvertices += st.tvertices;
         stats.extensions += st.extensions;
         stats.pieces += st.pieces;
+        stats.folded += st.folded;
         stats.rounds = rounds;
         out = next;
     }
@@ -188,5 +192,9 @@ fn isect_once(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
     };
     let (out, vst) = crate::group::vlmerge(rb.out, &opts)?;
     stats.tvertices = vst.tvertices;
+    // Welding can bend a face off its plane; its triangles are looked at
+    // again by the next round.
+    let (out, folded) = crate::planar::refold(out, eps);
+    stats.folded = folded;
     Ok((out, stats))
 }
