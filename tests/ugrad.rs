@@ -759,3 +759,42 @@ fn a_dim_little_emitter_does_not_hold_back_the_tail() {
         "the tail started after {after} shots: {err}"
     );
 }
+
+/// `--gradient-scale` scales the automatic gradient threshold (printed with
+/// -v) and refines more: more leaf elements at half the threshold.
+#[test]
+fn gradient_scale_scales_the_automatic_threshold() {
+    let input = patches("cornell-box.ug", "100");
+    let solve = |scale: &str| {
+        let out = run(
+            "ugrad",
+            &[
+                "-v",
+                "--converge",
+                "0.05",
+                "--tail",
+                "0",
+                "--gradient-scale",
+                scale,
+            ],
+            Some(input.as_bytes()),
+        );
+        assert!(out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        let num = |key: &str, after: bool| -> f64 {
+            let line = err.lines().find(|l| l.contains(key)).expect(key);
+            let words: Vec<&str> = line
+                .split([' ', ',', ';'])
+                .filter(|w| !w.is_empty())
+                .collect();
+            let i = words.iter().position(|w| *w == key).expect(key);
+            let w = if after { words[i + 1] } else { words[i - 1] };
+            w.parse().unwrap_or_else(|_| panic!("{key}: {w}"))
+        };
+        (num("gradient", true), num("leaf", false))
+    };
+    let (g1, leaves1) = solve("1");
+    let (g2, leaves2) = solve("0.5");
+    assert!((g2 / g1 - 0.5).abs() < 1e-3, "gradient {g1} -> {g2}");
+    assert!(leaves2 > leaves1, "leaf elements {leaves1} -> {leaves2}");
+}
