@@ -296,7 +296,12 @@ pub fn copl_contact(m: &Model, eps: f64, contact: f64) -> Result<(Model, Stats),
     let (mut out, mut stats) = copl_once(m, eps, contact, None)?;
     let mut rounds = 1;
     let mut last = stats.pairs + stats.contacts;
-    let mut before: rustc_hash::FxHashSet<u64> = face_keys(m).into_iter().flatten().collect();
+    // (Hashed only when a second round will look.)
+    let mut before: rustc_hash::FxHashSet<u64> = if last > 0 {
+        face_keys(m).into_iter().flatten().collect()
+    } else {
+        Default::default()
+    };
     while last > 0 && rounds < MAX_ROUNDS {
         let now = face_keys(&out);
         let among: Vec<bool> = now

@@ -671,6 +671,16 @@ mod tests {
 mod slab_tests {
     use super::*;
 
+    /// Uniform numbers in [0, 1) from a xorshift generator seeded `z`.
+    fn xorshift(mut z: u64) -> impl FnMut() -> f64 {
+        move || {
+            z ^= z << 13;
+            z ^= z >> 7;
+            z ^= z << 17;
+            (z >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
     /// Rays aimed at points of the edges shared by a surface's triangles
     /// (a fan around an off-centre point of a skewed, tilted polygon) hit
     /// at least one of them: no cracks. Möller–Trumbore, the test before,
@@ -678,13 +688,7 @@ mod slab_tests {
     /// written).
     #[test]
     fn rays_through_shared_edges_do_not_pass_between_triangles() {
-        let mut z = 0x2545_f491_4f6c_dd1du64;
-        let mut rnd = || {
-            z ^= z << 13;
-            z ^= z >> 7;
-            z ^= z << 17;
-            (z >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = xorshift(0x2545_f491_4f6c_dd1d);
         let mut missed = 0;
         for _ in 0..2000 {
             // A polygon of 7 corners in a random plane, fanned from a point.
@@ -808,13 +812,7 @@ mod slab_tests {
     /// rays through its edges included).
     #[test]
     fn finite_slab_test_matches_the_general_one() {
-        let mut x = 0x9e37_79b9_7f4a_7c15u64;
-        let mut rnd = || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            (x >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = xorshift(0x9e37_79b9_7f4a_7c15);
         let (mut met, mut missed) = (0, 0);
         for _ in 0..200_000 {
             let lo = DVec3::new(rnd(), rnd(), rnd()) * 4.0 - 2.0;
