@@ -154,10 +154,15 @@ pub struct Options {
     pub penumbra_size: Option<f64>,
     /// A receiver that sees some of a shot's pieces (from their centres)
     /// and not others lies in the shot's penumbra: its light from each
-    /// piece is then found by cutting the piece in four where the quarters'
-    /// centres disagree, down to 1/`penumbra_split` of the piece (rounded
+    /// piece is then found by cutting the piece in four where the cell's
+    /// corners disagree, down to 1/`penumbra_split` of the piece (rounded
     /// up to a power of two; 1: never).
     pub penumbra_split: usize,
+    /// Receivers within this many of the shot's largest piece sizes of a
+    /// receiver found in its penumbra are sampled as in the penumbra too
+    /// (0: only those whose own piece centres, or whose leaf's corners,
+    /// disagree).
+    pub penumbra_reach: f64,
     /// Elements whose radiosity differs across an edge by more than this are
     /// subdivided (§6); auto: a tenth of the scene's expected mean radiosity
     /// (emitted power per area and channel over 1 − mean reflectance).
@@ -218,6 +223,7 @@ impl Default for Options {
             batch: 20,
             penumbra_energy: 0.02,
             penumbra_split: 16,
+            penumbra_reach: 1.0,
             penumbra_size: None,
             gradient: None,
             gradient_scale: 1.0,
@@ -441,6 +447,60 @@ struct Past {
     /// The box of the vertices the shot reached (empty: lo > hi).
     lo: DVec3,
     hi: DVec3,
+    /// Where its penumbra lies.
+    penumbra: Penumbra,
+}
+
+/// Where a shot's penumbra lies: the cells of a grid of side `r` (the
+/// shot's largest piece times [`Options::penumbra_reach`]) that hold a
+/// receiver found in it. A receiver whose piece centres agree can still lie
+/// in a penumbra when a shadow's edge crosses a piece between its centre
+/// and its border; within about `r` of a receiver where they disagree it is
+/// sampled as in the penumbra.
+#[derive(Clone, Debug, Default)]
+struct Penumbra {
+    r: f64,
+    cells: std::collections::HashSet<[i64; 3]>,
+}
+
+impl Penumbra {
+    fn new(r: f64) -> Self {
+        Penumbra {
+            r: if r.is_finite() && r > 0.0 { r } else { 0.0 },
+            cells: Default::default(),
+        }
+    }
+
+    fn cell(&self, p: DVec3) -> [i64; 3] {
+        let q = (p / self.r).floor();
+        [q.x as i64, q.y as i64, q.z as i64]
+    }
+
+    fn insert(&mut self, p: DVec3) {
+        if self.r > 0.0 {
+            self.cells.insert(self.cell(p));
+        }
+    }
+
+    /// Whether `p` lies in or next to a cell that holds a receiver in the
+    /// penumbra (so within `r` of one, at least).
+    fn near(&self, p: DVec3) -> bool {
+        if self.r <= 0.0 || self.cells.is_empty() {
+            return false;
+        }
+        let [x, y, z] = self.cell(p);
+        (-1..=1).any(|dx| {
+            (-1..=1).any(|dy| {
+                (-1..=1).any(|dz| {
+                    self.cells.contains(&[
+                        x.saturating_add(dx),
+                        y.saturating_add(dy),
+                        z.saturating_add(dz),
+                    ])
+                })
+            })
+        })
+    }
 }
 
 impl<'v> Solver<'v> {
@@ -860,7 +920,9 @@ impl<'v> Solver<'v> {
         self.gain.iter_mut().for_each(|g| *g = 0.0);
         self.d_b = d_b;
         // The vertices this shot reached (gain > 0), in no particular order.
-        let mut lit = self.shoot_at(Targets::All, &shooters, surface, normal);
+        let reach = shooters.iter().map(|p| p.size).fold(0.0, f64::max);
+        let mut penumbra = Penumbra::new(self.opts.penumbra_reach * reach);
+        let mut lit = self.shoot_at(Targets::All, &shooters, surface, normal, &mut penumbra);
         let reached = lit.len();
         self.shot[p.idx()] = add(self.shot[p.idx()], d_phi);
         if self.opts.shape {
@@ -925,7 +987,13 @@ impl<'v> Solver<'v> {
                 }
                 self.d_b = d_b;
             }
-            lit.extend(self.shoot_at(Targets::List(&fresh), &shooters, surface, normal));
+            lit.extend(self.shoot_at(
+                Targets::List(&fresh),
+                &shooters,
+                surface,
+                normal,
+                &mut penumbra,
+            ));
         }
         // Correct the trapezoid rule over the leaves this light reached.
         let recorded = self.history.len() < HISTORY_CAP || first_light;
@@ -953,6 +1021,7 @@ impl<'v> Solver<'v> {
                 d_b,
                 lo,
                 hi,
+                penumbra,
             });
         }
 
@@ -1379,9 +1448,12 @@ impl<'v> Solver<'v> {
 
     /// Splits the leaves across one of whose edges the tail's reflected
     /// light (ρ × the tail's irradiance) is steep by the gradient rule
-    /// (above the minimum edge), rounds until none is left; each new vertex
-    /// takes the light of the shots before the tail as §6 does (the mean
-    /// of its parents') and gathers the tail's exactly. `t_all` is the
+    /// (above the minimum edge), rounds until none is left, then those
+    /// across which the whole radiosity is steep (light added after the
+    /// shot that last judged them), steepest first within the budget; each
+    /// new vertex takes the light of the shots before the tail as
+    /// [`Self::regather`] does (the history's shots exactly, the others by
+    /// the mean of its parents') and gathers the tail's exactly. `t_all` is the
     /// tail's irradiance per vertex (grown here). Returns the elements
     /// split and the vertices gathered.
     fn refine_tail(
@@ -1404,7 +1476,11 @@ impl<'v> Solver<'v> {
                 break;
             }
             let (this, t) = (&*self, &*t_all);
-            let mut to_split: Vec<(f64, ElemId)> = scan_leaves(&self.mesh, |e| {
+            // Per leaf, its steepness in the tail's own light, reflected,
+            // and in all of the radiosity (the shots' light was judged by
+            // the shots' own refinement, each at its time, and a leaf can
+            // become steep only with the light after it).
+            let steep_leaves: Vec<(bool, f64, ElemId)> = scan_leaves(&self.mesh, |e| {
                 let c = this.mesh.elem_corners(e);
                 if !c.iter().any(|&v| sum(t[v.idx()]) > 0.0)
                     || this.mesh.elem_longest_edge(e) <= min_edge
@@ -1412,18 +1488,32 @@ impl<'v> Solver<'v> {
                 {
                     return None;
                 }
-                // The tail's own light, reflected: where it is not linear
-                // (the shots' light was judged by the shots' own refinement).
                 let r = this.rho[this.mesh.elem_surface(e).idx()];
-                let b = |v: VertId| {
+                let tail = |v: VertId| {
                     let h = t[v.idx()];
                     [r[0] * h[0], r[1] * h[1], r[2] * h[2]]
                 };
-                let s = (0..c.len())
-                    .map(|i| steepness(b(c[i]), b(c[(i + 1) % c.len()]), grad, rel))
-                    .fold(0.0, f64::max);
-                (s > 1.0).then_some((s, e))
+                let edges = |f: &dyn Fn(VertId) -> Rgb| {
+                    (0..c.len())
+                        .map(|i| steepness(f(c[i]), f(c[(i + 1) % c.len()]), grad, rel))
+                        .fold(0.0, f64::max)
+                };
+                let s = edges(&tail);
+                if s > 1.0 {
+                    return Some((true, s, e));
+                }
+                let s = edges(&|v| this.radiosity(v));
+                (s > 1.0).then_some((false, s, e))
             });
+            // The tail's own first, its cascades to the end (a feature
+            // smaller than a leaf is found over several rounds); the rest
+            // only once none is left.
+            let tail_first = steep_leaves.iter().any(|l| l.0);
+            let mut to_split: Vec<(f64, ElemId)> = steep_leaves
+                .into_iter()
+                .filter(|l| l.0 == tail_first)
+                .map(|(_, s, e)| (s, e))
+                .collect();
             if to_split.is_empty() {
                 break;
             }
@@ -1468,6 +1558,9 @@ impl<'v> Solver<'v> {
             }
             let mut ids: Vec<VertId> = fresh.iter().map(|f| f.0).collect();
             ids.sort_unstable();
+            if self.opts.regather && !self.history.is_empty() {
+                self.regather_before_tail(&ids, t_all);
+            }
             let dirs = self.inward(&ids);
             let mesh = &self.mesh;
             let patch_of = &patch_of;
@@ -1493,6 +1586,41 @@ impl<'v> Solver<'v> {
             }
         }
         (split_count, gathered)
+    }
+
+    /// The shots' light at vertices made after the tail (`fresh`, in id
+    /// order): the history's exactly and the other shots' by §6's mean, as
+    /// [`Self::regather`] gives it before the tail; the tail's part
+    /// (`t_all`) is taken out of the vertices it reads and put back.
+    fn regather_before_tail(&mut self, fresh: &[VertId], t_all: &[Rgb]) {
+        let mut read: Vec<VertId> = fresh
+            .iter()
+            .filter_map(|&v| match self.mesh.vertex_origin(v) {
+                libmesh::VertexOrigin::Split(ab) => Some(ab),
+                libmesh::VertexOrigin::Input(_) => None,
+            })
+            .flatten()
+            .chain(fresh.iter().copied())
+            .collect();
+        read.sort_unstable();
+        read.dedup();
+        let saved: Vec<Rgb> = read.iter().map(|&x| self.h[x.idx()]).collect();
+        for &x in &read {
+            let (h, t) = (self.h[x.idx()], t_all[x.idx()]);
+            self.h[x.idx()] = [h[0] - t[0], h[1] - t[1], h[2] - t[2]];
+        }
+        self.gain.resize(self.mesh.num_vertices(), 0.0);
+        self.regather(fresh, false);
+        for (&x, h) in read.iter().zip(saved) {
+            if fresh.binary_search(&x).is_ok() {
+                self.h[x.idx()] = add(self.h[x.idx()], t_all[x.idx()]);
+            } else {
+                self.h[x.idx()] = h;
+            }
+        }
+        for &v in fresh {
+            self.gain[v.idx()] = 0.0;
+        }
     }
 
     /// Per vertex, a patch of its own surface that it is a corner of a
@@ -1775,9 +1903,9 @@ impl<'v> Solver<'v> {
                 }
             })
             .collect();
-        let history = std::mem::take(&mut self.history);
+        let mut history = std::mem::take(&mut self.history);
         let mut some: Vec<VertId> = Vec::new();
-        for past in &history {
+        for past in &mut history {
             some.clear();
             some.extend(targets.iter().zip(&span).filter_map(|(&v, (lo, hi))| {
                 (lo.cmple(past.hi).all() && hi.cmpge(past.lo).all()).then_some(v)
@@ -1794,6 +1922,7 @@ impl<'v> Solver<'v> {
                 &past.shooters,
                 past.surface,
                 past.normal,
+                &mut past.penumbra,
             );
         }
         self.history = history;
@@ -1885,6 +2014,7 @@ impl<'v> Solver<'v> {
         shooters: &[Piece],
         surface: SurfaceId,
         normal: DVec3,
+        penumbra: &mut Penumbra,
     ) -> Vec<VertId> {
         let deltas = self.offsets(shooters);
         // A shot at every vertex goes to those of the surfaces that may see
@@ -1995,6 +2125,11 @@ impl<'v> Solver<'v> {
         // on it.
         let k = self.opts.penumbra_split;
         let split = k > 1 && shooters.len() > 1;
+        if let (true, Targets::List(list)) = (split, targets) {
+            for v in self.split_spans(list, shooters, &deltas, surface, normal) {
+                self.seen[v.idx()] |= 4;
+            }
+        }
         if split && matches!(targets, Targets::All) {
             let flags = &self.seen;
             let around = patches_around(&self.mesh, &all);
@@ -2012,6 +2147,23 @@ impl<'v> Solver<'v> {
                     if self.seen[v.idx()] != 0 {
                         self.seen[v.idx()] |= 4;
                     }
+                }
+            }
+        }
+        // Where the penumbra lies, then the receivers near it.
+        if split && penumbra.r > 0.0 {
+            for i in 0..n_targets {
+                let v = target(i);
+                let f = self.seen[v.idx()];
+                if f & 3 == 3 || f & 4 != 0 {
+                    penumbra.insert(self.mesh.vertex_pos(v));
+                }
+            }
+            for i in 0..n_targets {
+                let v = target(i);
+                let f = self.seen[v.idx()];
+                if f != 0 && f & 3 != 3 && f & 4 == 0 && penumbra.near(self.mesh.vertex_pos(v)) {
+                    self.seen[v.idx()] |= 4;
                 }
             }
         }
@@ -2067,15 +2219,97 @@ impl<'v> Solver<'v> {
         reached
     }
 
+    /// The rule of the leaves spanning a shadow edge, for a shot at a list
+    /// of vertices made by splits: a listed vertex that agrees with itself
+    /// (it sees every piece's centre, or none) but not with a parent (one
+    /// endpoint of the edge it was made on: a listed vertex's flags, or the
+    /// centres seen from a parent outside the list, found here) lies on an
+    /// edge that spans the shadow's edge, and is returned, to be marked (bit
+    /// 2 of `seen`) for penumbra sampling. Without this a vertex made inside a penumbra
+    /// kept the light of the piece centres it saw (measured: floor vertices
+    /// at the Cornell box's tall block −19…+23% in the direct light).
+    fn split_spans(
+        &self,
+        list: &[VertId],
+        shooters: &[Piece],
+        deltas: &[f64],
+        surface: SurfaceId,
+        normal: DVec3,
+    ) -> Vec<VertId> {
+        let parents_of = |v: VertId| match self.mesh.vertex_origin(v) {
+            libmesh::VertexOrigin::Split(ab) => Some(ab),
+            libmesh::VertexOrigin::Input(_) => None,
+        };
+        // Only vertices that agree with themselves need their parents.
+        let uniform = |f: u8| f != 0 && f & 3 != 3 && f & 4 == 0;
+        let mut listed: Vec<VertId> = list.to_vec();
+        listed.sort_unstable();
+        let mut outside: Vec<VertId> = list
+            .iter()
+            .filter(|&&v| uniform(self.seen[v.idx()]))
+            .filter_map(|&v| parents_of(v))
+            .flatten()
+            .filter(|x| listed.binary_search(x).is_err())
+            .collect();
+        outside.sort_unstable();
+        outside.dedup();
+        // The parents' flags, as the shot's loop would set them.
+        let mut flags = vec![0u8; outside.len()];
+        if !outside.is_empty() {
+            let mesh = &self.mesh;
+            for (Piece { c, .. }, &delta) in shooters.iter().zip(deltas) {
+                let (idx, cand): (Vec<usize>, Vec<VertId>) = outside
+                    .iter()
+                    .enumerate()
+                    .filter(|&(_, &v)| {
+                        mesh.vertex_surface(v) != surface
+                            && receives(
+                                mesh.receiver_pos(v),
+                                mesh.vertex_normal(v),
+                                *c,
+                                normal,
+                                delta,
+                            )
+                    })
+                    .map(|(i, &v)| (i, v))
+                    .unzip();
+                if cand.is_empty() {
+                    continue;
+                }
+                let seen = self.vis.visible_few(mesh, *c, surface, &cand);
+                for (i, s) in idx.into_iter().zip(seen) {
+                    flags[i] |= if s { 1 } else { 2 };
+                }
+            }
+        }
+        let flag_of = |s: &Self, x: VertId| match outside.binary_search(&x) {
+            Ok(i) => flags[i],
+            Err(_) => s.seen[x.idx()] & 3,
+        };
+        list.iter()
+            .copied()
+            .filter(|&v| {
+                let f = self.seen[v.idx()];
+                uniform(f)
+                    && parents_of(v)
+                        .is_some_and(|[a, b]| (f | flag_of(self, a) | flag_of(self, b)) & 3 == 3)
+            })
+            .collect()
+    }
+
     /// The form factors from receivers in a penumbra to one shooter piece,
-    /// visibility sampled adaptively: the piece is cut into a 2 × 2 grid,
-    /// then 4 × 4 and so on to 2^`depth` a side, and at each level only the
-    /// cells of a receiver whose state (seen from the cell's centre or not)
-    /// differs from a neighbouring cell's are cut further; the others are
-    /// settled, whole. So the shadow's edge across the piece is found to
-    /// 2^-`depth` of the piece for the cost of the cells along it. `shot` is
-    /// the piece's centre, the shooter's normal, the §5.4 offset and the
-    /// shooter's surface; `nudge` gives the §5.4 direction of a receiver.
+    /// visibility sampled adaptively at the corners of a grid of cells: the
+    /// piece is one cell, its four corners and its centre tried; a cell
+    /// whose corners (and, the first time, centre) do not all agree is cut
+    /// in four, down to 2^`depth` cells a side; a cell that agrees is
+    /// settled whole, seen or hidden, and a finest cell that does not is
+    /// taken as seen in the share of its corners seen. So the shadow's edge
+    /// across the piece is found to 2^-`depth` of the piece for the cost of
+    /// the cells along it, including an edge between the piece's centre and
+    /// its border. Corners are tried a hair inside the piece, so that no ray
+    /// starts on the shooter's border. `shot` is the piece's centre, the
+    /// shooter's normal, the §5.4 offset and the shooter's surface; `nudge`
+    /// gives the §5.4 direction of a receiver.
     fn penumbra_light(
         &self,
         poly: &[DVec3],
@@ -2111,61 +2345,72 @@ impl<'v> Solver<'v> {
             pts
         };
         let n = 1usize << depth;
+        let g = n + 1;
+        // Grid point (i, j) of the finest grid, a hair towards the centre.
+        const INSIDE: f64 = 1e-6;
+        let point = |i: usize, j: usize| {
+            let p = at(i as f64 / n as f64, j as f64 / n as f64);
+            p + (c - p) * INSIDE
+        };
         let nv = verts.len();
-        // Per receiver, the state of each finest cell: 1 seen, 2 hidden
-        // (every cell is written at level 1).
-        state.resize(nv * n * n, 0);
-        let mut active: Vec<Vec<(usize, usize)>> = vec![vec![(0, 0), (1, 0), (0, 1), (1, 1)]; nv];
-        // Visible settled cells: (receiver, level's cells a side, i, j).
-        let mut lit: Vec<(usize, usize, usize, usize)> = Vec::new();
-        for d in 1..=depth {
+        // Per receiver, the state of each grid point: 0 not tried, 1 seen,
+        // 2 hidden.
+        state.clear();
+        state.resize(nv * g * g, 0);
+        // The centre, tried with the first corners.
+        let mut centre_seen = vec![false; nv];
+        let mut active: Vec<Vec<(usize, usize)>> = vec![vec![(0, 0)]; nv];
+        // Settled cells (receiver, cells a side, i, j, share seen).
+        let mut lit: Vec<(usize, usize, usize, usize, f64)> = Vec::new();
+        for d in 0..=depth {
             let m = 1usize << d;
             let s = n / m;
-            let mut by_cell: Vec<Vec<usize>> = vec![Vec::new(); m * m];
-            for (k, cells) in active.iter().enumerate() {
-                for &(i, j) in cells {
-                    by_cell[j * m + i].push(k);
-                }
-            }
-            // Every (cell centre, receiver) pair of this level in one batch.
+            // Every grid point not yet tried by a receiver, in one batch
+            // (the first time, the centres after them).
             let mut pairs: Vec<(DVec3, VertId)> = Vec::new();
-            for (ci, ks) in by_cell.iter().enumerate() {
-                if ks.is_empty() {
-                    continue;
-                }
-                let pts = cell(m, ci % m, ci / m);
-                let centre = pts.iter().copied().sum::<DVec3>() / pts.len() as f64;
-                pairs.extend(ks.iter().map(|&k| (centre, verts[k])));
-            }
-            let seen = self.vis.visible_pairs(mesh, surface, &pairs);
-            let mut seen = seen.into_iter();
-            for (ci, ks) in by_cell.iter().enumerate() {
-                let (i, j) = (ci % m, ci / m);
-                for &k in ks {
-                    let st = if seen.next().unwrap_or(false) { 1 } else { 2 };
-                    let grid = &mut state[k * n * n..(k + 1) * n * n];
-                    for fj in j * s..(j + 1) * s {
-                        grid[fj * n + i * s..fj * n + (i + 1) * s].fill(st);
+            let mut slots: Vec<usize> = Vec::new();
+            for (k, cells) in active.iter().enumerate() {
+                let grid = &mut state[k * g * g..(k + 1) * g * g];
+                for &(i, j) in cells {
+                    for (gi, gj) in [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)] {
+                        let slot = gj * s * g + gi * s;
+                        if grid[slot] == 0 {
+                            grid[slot] = 3; // asked
+                            pairs.push((point(gi * s, gj * s), verts[k]));
+                            slots.push(k * g * g + slot);
+                        }
                     }
                 }
             }
+            if d == 0 {
+                pairs.extend(verts.iter().map(|&v| (c, v)));
+            }
+            let seen = self.vis.visible_pairs(mesh, surface, &pairs);
+            for (&slot, &sn) in slots.iter().zip(&seen) {
+                state[slot] = if sn { 1 } else { 2 };
+            }
+            if d == 0 {
+                centre_seen.copy_from_slice(&seen[slots.len()..]);
+            }
             let last = d == depth;
             for (k, cells) in active.iter_mut().enumerate() {
-                let grid = &state[k * n * n..(k + 1) * n * n];
-                let st = |i: usize, j: usize| grid[j * s * n + i * s];
+                let grid = &state[k * g * g..(k + 1) * g * g];
+                let st = |gi: usize, gj: usize| grid[gj * s * g + gi * s];
                 let mut next = Vec::new();
                 for (i, j) in std::mem::take(cells) {
-                    let me = st(i, j);
-                    let differs = (i > 0 && st(i - 1, j) != me)
-                        || (i + 1 < m && st(i + 1, j) != me)
-                        || (j > 0 && st(i, j - 1) != me)
-                        || (j + 1 < m && st(i, j + 1) != me);
-                    if differs && !last {
+                    let corners = [st(i, j), st(i + 1, j), st(i + 1, j + 1), st(i, j + 1)];
+                    let seen_n = corners.iter().filter(|&&x| x == 1).count();
+                    let centre_agrees = d > 0 || centre_seen[k] == (seen_n == 4);
+                    if (seen_n == 0 || seen_n == 4) && centre_agrees {
+                        if seen_n == 4 {
+                            lit.push((k, m, i, j, 1.0));
+                        }
+                    } else if !last {
                         for (di, dj) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
                             next.push((2 * i + di, 2 * j + dj));
                         }
-                    } else if me == 1 {
-                        lit.push((k, m, i, j));
+                    } else if seen_n > 0 {
+                        lit.push((k, m, i, j, seen_n as f64 / 4.0));
                     }
                 }
                 *cells = next;
@@ -2173,10 +2418,10 @@ impl<'v> Solver<'v> {
         }
         let ff: Vec<f64> = lit
             .par_iter()
-            .map(|&(k, m, i, j)| {
+            .map(|&(k, m, i, j, share)| {
                 let v = verts[k];
                 let x = offset_receiver(mesh.receiver_pos(v), || nudge(v), c, normal, delta);
-                point_to_polygon(x, mesh.vertex_normal(v), &cell(m, i, j))
+                share * point_to_polygon(x, mesh.vertex_normal(v), &cell(m, i, j))
             })
             .collect();
         let mut out = vec![0.0; nv];
