@@ -3399,6 +3399,39 @@ mod tests {
         (model, mesh)
     }
 
+    /// A penumbra record answers "near" for points within its side of a
+    /// recorded receiver (in any direction, negative coordinates too), not
+    /// for points two cells away; a zero or non-finite side records nothing.
+    #[test]
+    fn penumbra_cells_reach_one_side() {
+        let mut p = Penumbra::new(0.5);
+        assert!(!p.near(DVec3::ZERO), "an empty record is near nothing");
+        p.insert(DVec3::new(-0.1, 2.2, 0.0));
+        for d in [
+            DVec3::new(0.49, 0.0, 0.0),
+            DVec3::new(-0.49, 0.0, 0.0),
+            DVec3::new(0.0, 0.49, -0.49),
+            DVec3::new(0.3, -0.3, 0.3),
+        ] {
+            assert!(p.near(DVec3::new(-0.1, 2.2, 0.0) + d), "{d}");
+        }
+        for far in [
+            DVec3::new(-1.1, 2.2, 0.0),
+            DVec3::new(-0.1, 3.3, 0.0),
+            DVec3::new(-0.1, 2.2, -1.1),
+        ] {
+            assert!(!p.near(far), "{far}");
+        }
+        for r in [0.0, f64::NAN, f64::INFINITY, -1.0] {
+            let mut q = Penumbra::new(r);
+            q.insert(DVec3::ZERO);
+            assert!(q.cells.is_empty() && !q.near(DVec3::ZERO), "{r}");
+        }
+        // Huge coordinates saturate instead of overflowing.
+        p.insert(DVec3::splat(1e300));
+        assert!(p.near(DVec3::splat(1e300)));
+    }
+
     /// A surface's outline is kept when its patches make one convex polygon
     /// (collinear boundary points dropped), not for an L, a ring or a
     /// face with a hole; and a convex outline hides what lies in its
