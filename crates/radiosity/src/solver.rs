@@ -344,6 +344,9 @@ pub struct Solver<'v> {
     /// Energy already shot per patch.
     shot: Vec<Rgb>,
     emitted: f64,
+    /// Per surface, whether it emits more than `--penumbra-energy` of the
+    /// emitted energy (all its patches together).
+    bright: Vec<bool>,
     vis: &'v dyn Visibility,
     /// Per surface whose patches make one convex polygon, its outline
     /// (`outline[outline_start[s]..outline_start[s + 1]]`, empty for the
@@ -530,6 +533,15 @@ impl<'v> Solver<'v> {
             .patches()
             .map(|p| sum(emit[mesh.patch_surface(p).idx()]) * mesh.patch_area(p))
             .sum();
+        let mut surface_power = vec![0.0; emit.len()];
+        for p in mesh.patches() {
+            let s = mesh.patch_surface(p).idx();
+            surface_power[s] += sum(emit[s]) * mesh.patch_area(p);
+        }
+        let bright: Vec<bool> = surface_power
+            .iter()
+            .map(|&w| w > 0.0 && w > opts.penumbra_energy * emitted)
+            .collect();
         let area: f64 = mesh.patches().map(|p| mesh.patch_area(p)).sum();
         let mean_edge = if np > 0 {
             mesh.patches()
@@ -585,6 +597,7 @@ impl<'v> Solver<'v> {
             d_b: [0.0; 3],
             shot: vec![[0.0; 3]; np],
             emitted,
+            bright,
             vis,
             opts,
             penumbra_size,
@@ -2123,8 +2136,12 @@ impl<'v> Solver<'v> {
         // edge (corners that see all of the shot and corners that see none):
         // a receiver can lie in a penumbra while every piece's centre agrees
         // on it.
+        // A shot of one piece samples penumbrae too when its surface emits
+        // more than `--penumbra-energy` of the light, all its patches
+        // together (a lamp cut into patches of under that each shoots them
+        // whole: its shadows' edges were placed from their centres).
         let k = self.opts.penumbra_split;
-        let split = k > 1 && shooters.len() > 1;
+        let split = k > 1 && (shooters.len() > 1 || self.bright[surface.idx()]);
         if let (true, Targets::List(list)) = (split, targets) {
             for v in self.split_spans(list, shooters, &deltas, surface, normal) {
                 self.seen[v.idx()] |= 4;
