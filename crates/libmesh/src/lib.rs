@@ -389,6 +389,15 @@ impl Mesh {
         self.surfaces[self.vsurf[v.idx()] as usize].normal
     }
 
+    /// The ends of the edge a vertex was made on, for a vertex made by a
+    /// split (`None` for an input vertex).
+    pub fn split_parents(&self, v: VertId) -> Option<[VertId; 2]> {
+        match self.vertex_origin(v) {
+            VertexOrigin::Split(ab) => Some(ab),
+            VertexOrigin::Input(_) => None,
+        }
+    }
+
     pub fn vertex_origin(&self, v: VertId) -> VertexOrigin {
         let [a, b] = self.vparent[v.idx()];
         if b == NONE {

@@ -101,6 +101,34 @@ fn steep(a: Rgb, b: Rgb, grad: f64, rel: f64) -> bool {
     steepness(a, b, grad, rel) > 1.0
 }
 
+/// Whether vertex `v` may receive from a shooter piece centred at `c`
+/// (normal `normal`, §5.4 offset `delta`) of surface `surface`: not on the
+/// shooter's surface, in front of its plane and facing it.
+fn candidate(
+    mesh: &Mesh,
+    v: VertId,
+    surface: SurfaceId,
+    c: DVec3,
+    normal: DVec3,
+    delta: f64,
+) -> bool {
+    mesh.vertex_surface(v) != surface
+        && receives(
+            mesh.receiver_pos(v),
+            mesh.vertex_normal(v),
+            c,
+            normal,
+            delta,
+        )
+}
+
+/// A shot's flags (`Solver::seen`) of a receiver that tried its pieces and
+/// agrees with itself: it saw every piece's centre, or none, and is not
+/// marked for penumbra sampling yet.
+fn agrees_with_itself(f: u8) -> bool {
+    f != 0 && f & 3 != 3 && f & 4 == 0
+}
+
 /// Replaces vertex `v`'s share of the tail's irradiance (`t_all[v]`, also
 /// counted in its total `h[v]`) by `t`.
 fn set_tail(h: &mut [Rgb], t_all: &mut [Rgb], v: usize, t: Rgb) {
@@ -1608,10 +1636,7 @@ impl<'v> Solver<'v> {
     fn regather_before_tail(&mut self, fresh: &[VertId], t_all: &[Rgb]) {
         let mut read: Vec<VertId> = fresh
             .iter()
-            .filter_map(|&v| match self.mesh.vertex_origin(v) {
-                libmesh::VertexOrigin::Split(ab) => Some(ab),
-                libmesh::VertexOrigin::Input(_) => None,
-            })
+            .filter_map(|&v| self.mesh.split_parents(v))
             .flatten()
             .chain(fresh.iter().copied())
             .collect();
@@ -1867,10 +1892,7 @@ impl<'v> Solver<'v> {
         if fresh.is_empty() {
             return;
         }
-        let parents_of = |s: &Self, v: VertId| match s.mesh.vertex_origin(v) {
-            libmesh::VertexOrigin::Split(ab) => Some(ab),
-            libmesh::VertexOrigin::Input(_) => None,
-        };
+        let parents_of = |s: &Self, v: VertId| s.mesh.split_parents(v);
         let is_fresh = |v: VertId| fresh.binary_search(&v).is_ok();
         // Every shot so far is in the history (the shot in progress is in
         // neither list yet; regathering stops when the tail runs).
@@ -2047,18 +2069,8 @@ impl<'v> Solver<'v> {
             Targets::List(l) => l.len(),
         };
         // Candidates: in front of the shooter's plane and facing it.
-        let candidate = |v: VertId, c: DVec3, delta: f64| {
-            if mesh.vertex_surface(v) == surface {
-                return false;
-            }
-            receives(
-                mesh.receiver_pos(v),
-                mesh.vertex_normal(v),
-                c,
-                normal,
-                delta,
-            )
-        };
+        let candidate =
+            |v: VertId, c: DVec3, delta: f64| candidate(mesh, v, surface, c, normal, delta);
         // §5.4 needs each receiver's direction into its own surface only for
         // candidates on (or just behind) a shooter's plane: find those first.
         let mut near_plane: Vec<VertId> = Vec::new();
@@ -2179,7 +2191,7 @@ impl<'v> Solver<'v> {
             for i in 0..n_targets {
                 let v = target(i);
                 let f = self.seen[v.idx()];
-                if f != 0 && f & 3 != 3 && f & 4 == 0 && penumbra.near(self.mesh.vertex_pos(v)) {
+                if agrees_with_itself(f) && penumbra.near(self.mesh.vertex_pos(v)) {
                     self.seen[v.idx()] |= 4;
                 }
             }
@@ -2253,17 +2265,13 @@ impl<'v> Solver<'v> {
         surface: SurfaceId,
         normal: DVec3,
     ) -> Vec<VertId> {
-        let parents_of = |v: VertId| match self.mesh.vertex_origin(v) {
-            libmesh::VertexOrigin::Split(ab) => Some(ab),
-            libmesh::VertexOrigin::Input(_) => None,
-        };
+        let parents_of = |v: VertId| self.mesh.split_parents(v);
         // Only vertices that agree with themselves need their parents.
-        let uniform = |f: u8| f != 0 && f & 3 != 3 && f & 4 == 0;
         let mut listed: Vec<VertId> = list.to_vec();
         listed.sort_unstable();
         let mut outside: Vec<VertId> = list
             .iter()
-            .filter(|&&v| uniform(self.seen[v.idx()]))
+            .filter(|&&v| agrees_with_itself(self.seen[v.idx()]))
             .filter_map(|&v| parents_of(v))
             .flatten()
             .filter(|x| listed.binary_search(x).is_err())
@@ -2278,16 +2286,7 @@ impl<'v> Solver<'v> {
                 let (idx, cand): (Vec<usize>, Vec<VertId>) = outside
                     .iter()
                     .enumerate()
-                    .filter(|&(_, &v)| {
-                        mesh.vertex_surface(v) != surface
-                            && receives(
-                                mesh.receiver_pos(v),
-                                mesh.vertex_normal(v),
-                                *c,
-                                normal,
-                                delta,
-                            )
-                    })
+                    .filter(|&(_, &v)| candidate(mesh, v, surface, *c, normal, delta))
                     .map(|(i, &v)| (i, v))
                     .unzip();
                 if cand.is_empty() {
@@ -2307,7 +2306,7 @@ impl<'v> Solver<'v> {
             .copied()
             .filter(|&v| {
                 let f = self.seen[v.idx()];
-                uniform(f)
+                agrees_with_itself(f)
                     && parents_of(v)
                         .is_some_and(|[a, b]| (f | flag_of(self, a) | flag_of(self, b)) & 3 == 3)
             })
@@ -2840,10 +2839,7 @@ impl<'v> Solver<'v> {
         if !missing.is_empty() {
             let mut parents: Vec<VertId> = missing
                 .iter()
-                .filter_map(|&k| match self.mesh.vertex_origin(verts[k]) {
-                    libmesh::VertexOrigin::Split([a, b]) => Some([a, b]),
-                    libmesh::VertexOrigin::Input(_) => None,
-                })
+                .filter_map(|&k| self.mesh.split_parents(verts[k]))
                 .flatten()
                 .collect();
             parents.sort_unstable();

@@ -347,21 +347,36 @@ fn no_direct_light_reaches_past_a_partition() {
     );
 }
 
+/// A 1 x 1 lamp at height 1 over a floor, and a black plate at height 0.5
+/// covering x < 0.3 (and every y the rays cross): from a floor point p the
+/// plate hides the lamp where x < 0.6 - p.x, so p sees the rectangle
+/// [max(0, 0.6 - p.x), 1] x [0, 1] of the lamp: a closed form
+/// ([`plate_light`]).
+const PLATE_SCENE: &str = "defmat lamp; diffuse_rgb 0 0 0; emission_rgb 1 1 1; end;\n\
+    c_rgb floor 0.5 0.5 0.5; c_rgb black 0 0 0;\n\
+    v l0 0 0 1; v l1 1 0 1; v l2 1 1 1; v l3 0 1 1;\n\
+    f lamp (l0 l3 l2 l1) lamp;\n\
+    v p0 -3 -3 0.5; v p1 0.3 -3 0.5; v p2 0.3 4 0.5; v p3 -3 4 0.5;\n\
+    f plate (p0 p1 p2 p3) black;\n\
+    v f0 -1.5 -1.5 0; v f1 2.5 -1.5 0; v f2 2.5 2.5 0; v f3 -1.5 2.5 0;\n\
+    f floor (f0 f1 f2 f3) floor;";
+
+/// At floor point `p` of [`PLATE_SCENE`]: where the lamp's visible part
+/// starts (x1), the form factor to that part, and to the whole lamp.
+fn plate_light(p: glam::DVec3) -> (f64, f64, f64) {
+    let x1 = (0.6 - p.x).max(0.0);
+    let want = if x1 >= 1.0 {
+        0.0
+    } else {
+        rect_ff(p.x, p.y, 1.0, x1, 1.0, 0.0, 1.0)
+    };
+    (x1, want, rect_ff(p.x, p.y, 1.0, 0.0, 1.0, 0.0, 1.0))
+}
+
 #[test]
 fn a_penumbra_is_sampled_finely() {
-    // A 1 x 1 lamp at height 1 over a floor, and a black plate at height 0.5
-    // covering x < 0.3 (and every y the rays cross): from a floor point p
-    // the plate hides the lamp where x < 0.6 - p.x, so p sees the rectangle
-    // [max(0, 0.6 - p.x), 1] x [0, 1] of the lamp: a closed form.
-    let src = "defmat lamp; diffuse_rgb 0 0 0; emission_rgb 1 1 1; end;\n\
-               c_rgb floor 0.5 0.5 0.5; c_rgb black 0 0 0;\n\
-               v l0 0 0 1; v l1 1 0 1; v l2 1 1 1; v l3 0 1 1;\n\
-               f lamp (l0 l3 l2 l1) lamp;\n\
-               v p0 -3 -3 0.5; v p1 0.3 -3 0.5; v p2 0.3 4 0.5; v p3 -3 4 0.5;\n\
-               f plate (p0 p1 p2 p3) black;\n\
-               v f0 -1.5 -1.5 0; v f1 2.5 -1.5 0; v f2 2.5 2.5 0; v f3 -1.5 2.5 0;\n\
-               f floor (f0 f1 f2 f3) floor;";
-    let model = patches(src, 0.5);
+    // The plate scene (`PLATE_SCENE`), without refinement.
+    let model = patches(PLATE_SCENE, 0.5);
     let worst = |split: usize| {
         let mesh = libmesh::Mesh::from_model(&model, 1e-9).unwrap();
         let vis = RayVisibility::new(&mesh);
@@ -381,13 +396,7 @@ fn a_penumbra_is_sampled_finely() {
             if m.vertex_pos(v).z != 0.0 || m.vertex_normal(v).z < 0.5 {
                 continue;
             }
-            let x1 = (0.6 - p.x).max(0.0);
-            let want = if x1 >= 1.0 {
-                0.0
-            } else {
-                rect_ff(p.x, p.y, 1.0, x1, 1.0, 0.0, 1.0)
-            };
-            let full = rect_ff(p.x, p.y, 1.0, 0.0, 1.0, 0.0, 1.0);
+            let (x1, want, full) = plate_light(p);
             if x1 > 0.0 && x1 < 1.0 && want > 0.05 * full {
                 penumbra += 1;
             }
@@ -415,15 +424,7 @@ fn vertices_made_in_a_penumbra_are_sampled_finely() {
     // shot's piece centres, or none, while the shadow's edge crosses one of
     // the pieces. Those near a receiver where the centres disagree are
     // sampled too (`penumbra_reach`).
-    let src = "defmat lamp; diffuse_rgb 0 0 0; emission_rgb 1 1 1; end;\n\
-               c_rgb floor 0.5 0.5 0.5; c_rgb black 0 0 0;\n\
-               v l0 0 0 1; v l1 1 0 1; v l2 1 1 1; v l3 0 1 1;\n\
-               f lamp (l0 l3 l2 l1) lamp;\n\
-               v p0 -3 -3 0.5; v p1 0.3 -3 0.5; v p2 0.3 4 0.5; v p3 -3 4 0.5;\n\
-               f plate (p0 p1 p2 p3) black;\n\
-               v f0 -1.5 -1.5 0; v f1 2.5 -1.5 0; v f2 2.5 2.5 0; v f3 -1.5 2.5 0;\n\
-               f floor (f0 f1 f2 f3) floor;";
-    let model = patches(src, 0.5);
+    let model = patches(PLATE_SCENE, 0.5);
     let errors = |reach: f64, size: Option<f64>| {
         let mesh = libmesh::Mesh::from_model(&model, 1e-9).unwrap();
         let vis = RayVisibility::new(&mesh);
@@ -445,13 +446,7 @@ fn vertices_made_in_a_penumbra_are_sampled_finely() {
             if m.vertex_pos(v).z != 0.0 || m.vertex_normal(v).z < 0.5 {
                 continue;
             }
-            let x1 = (0.6 - p.x).max(0.0);
-            let want = if x1 >= 1.0 {
-                0.0
-            } else {
-                rect_ff(p.x, p.y, 1.0, x1, 1.0, 0.0, 1.0)
-            };
-            let full = rect_ff(p.x, p.y, 1.0, 0.0, 1.0, 0.0, 1.0);
+            let (x1, want, full) = plate_light(p);
             // Relative to the unoccluded light.
             let e = (solver.irradiance(v)[0] - want).abs() / full;
             if matches!(m.vertex_origin(v), libmesh::VertexOrigin::Split(_)) && x1 > 0.0 && x1 < 1.0
