@@ -177,7 +177,7 @@ fn one(seed: u64) -> Vec<String> {
     problems
 }
 
-fn run(seeds: std::ops::Range<u64>) {
+fn run(seeds: Vec<u64>) {
     let bad: Vec<String> = seeds
         .into_par_iter()
         .map(|s| (s, one(s)))
@@ -194,20 +194,40 @@ fn run(seeds: std::ops::Range<u64>) {
 
 #[test]
 fn dirty_buildings_seeds_0_to_49() {
-    run(0..50);
+    run((0..50).collect());
 }
 
 #[test]
 fn dirty_buildings_seeds_50_to_99() {
-    run(50..100);
+    run((50..100).collect());
 }
 
 #[test]
 fn dirty_buildings_seeds_100_to_149() {
-    run(100..150);
+    run((100..150).collect());
 }
 
 #[test]
 fn dirty_buildings_seeds_150_to_199() {
-    run(150..200);
+    run((150..200).collect());
+}
+
+/// Seeds beyond the 200 above that failed once: a slab's side face
+/// flipped by the generator stayed inward (the slab's top, whose edges the
+/// walls standing flush on it make non-manifold, was a component apart from
+/// the open tray of the rest, which the vote turned inside out), against
+/// the wall face flush with it.
+#[test]
+fn dirty_buildings_regression_seeds() {
+    run(vec![228, 556]);
+}
+
+/// More seeds by hand: `UG_SEEDS=200..1200 cargo test --release --test
+/// dirty_buildings_prop -- --ignored more_seeds` (default 200..400).
+#[test]
+#[ignore]
+fn more_seeds() {
+    let range = std::env::var("UG_SEEDS").unwrap_or_else(|_| "200..400".into());
+    let (a, b) = range.split_once("..").expect("UG_SEEDS is A..B");
+    run((a.parse().expect("A")..b.parse().expect("B")).collect());
 }

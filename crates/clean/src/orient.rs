@@ -6,6 +6,11 @@
 //!    breadth-first walk from the component's first face; the component's
 //!    reference orientation is that of the majority of its faces, so the
 //!    fewest faces are flipped for consistency.
+//!    Two open components that together form a closed surface (every
+//!    edge of their faces used exactly twice by them, one orientation for
+//!    both possible) are joined into one closed component: a slab's top
+//!    face, cut off from the rest of the slab box by the walls standing
+//!    flush on its edges, and the open tray of the rest.
 //! 2. Each component then gets its outside:
 //!    * a **closed** component (every edge has exactly two uses within it)
 //!      with volume faces outward (positive signed volume) like a solid object,
@@ -398,7 +403,8 @@ fn automatic(
         }
         comps.push(members);
     }
-    rep.components = comps.len();
+    let closed_union = close_pairs(mesh, &mut comps, &mut comp, &mut rel);
+    rep.components = comps.iter().filter(|m| !m.is_empty()).count();
     // Objects: components that share any edge (a wall whose foot face is
     // split off by edges it shares with an overlapping run is still one
     // wall). Enclosure is judged per object, never by a piece of one.
@@ -449,7 +455,17 @@ fn automatic(
         .enumerate()
         .map(|(c, members)| {
             decide(
-                mesh, &bvh, &comp, &rel, &samples, c, members, &objects, &object_of, opts,
+                mesh,
+                &bvh,
+                &comp,
+                &rel,
+                &samples,
+                c,
+                members,
+                closed_union[c],
+                &objects,
+                &object_of,
+                opts,
             )
         })
         .collect();
@@ -484,6 +500,113 @@ fn automatic(
     (ambiguous, flipped)
 }
 
+/// Joins pairs of open components that together form a closed surface:
+/// every edge of their faces used exactly twice by them, and the two
+/// orientable alike (the second flipped as a whole if need be). A slab's
+/// top face, whose edges the walls standing flush on it make non-manifold
+/// (top, side, wall foot and wall face meet there), is a component of its
+/// own, and the rest of the slab box an open tray, which the visibility
+/// vote turned inside out (its sides see only the tray from within).
+/// Joined, they are one solid and face outward. Returns per component
+/// whether it was closed this way; the second of a pair is left empty.
+fn close_pairs(
+    mesh: &Mesh,
+    comps: &mut [Vec<FaceId>],
+    comp: &mut [usize],
+    rel: &mut [bool],
+) -> Vec<bool> {
+    let mut closed_union = vec![false; comps.len()];
+    // The edges of component `c` not used exactly twice by it.
+    let open_edges = |comps: &[Vec<FaceId>], comp: &[usize], c: usize| -> Vec<winged::EdgeId> {
+        let mut out: Vec<winged::EdgeId> = comps[c]
+            .iter()
+            .flat_map(|&f| mesh.face_edges(f))
+            .filter(|&e| {
+                let u = &mesh.edge(e).uses;
+                u.iter().filter(|x| comp[x.face.idx()] == c).count() != 2
+            })
+            .collect();
+        out.sort_unstable();
+        out.dedup();
+        out
+    };
+    for c in 0..comps.len() {
+        if comps[c].is_empty() || closed_union[c] {
+            continue;
+        }
+        let open = open_edges(comps, comp, c);
+        if open.is_empty() {
+            continue;
+        }
+        // A partner uses every open edge of `c` (once: with `c`'s use, two).
+        let mut cand: Option<Vec<usize>> = None;
+        for &e in &open {
+            let u = &mesh.edge(e).uses;
+            if u.iter().filter(|x| comp[x.face.idx()] == c).count() != 1 {
+                cand = Some(Vec::new());
+                break;
+            }
+            let mut here: Vec<usize> = u
+                .iter()
+                .map(|x| comp[x.face.idx()])
+                .filter(|&d| d != c && !closed_union[d])
+                .collect();
+            here.sort_unstable();
+            // Exactly one use by the partner.
+            let once: Vec<usize> = here
+                .chunk_by(|a, b| a == b)
+                .filter(|g| g.len() == 1)
+                .map(|g| g[0])
+                .collect();
+            cand = Some(match cand {
+                None => once,
+                Some(prev) => prev.into_iter().filter(|d| once.contains(d)).collect(),
+            });
+            if cand.as_ref().is_some_and(|v| v.is_empty()) {
+                break;
+            }
+        }
+        for d in cand.unwrap_or_default() {
+            // Every open edge of `d` is one of `c`'s.
+            let open_d = open_edges(comps, comp, d);
+            if open_d != open {
+                continue;
+            }
+            // One relative flip of `d` makes every shared edge consistent.
+            let mut flip: Option<bool> = None;
+            let mut ok = true;
+            for &e in &open {
+                let u = &mesh.edge(e).uses;
+                let mine = u.iter().find(|x| comp[x.face.idx()] == c);
+                let other = u.iter().find(|x| comp[x.face.idx()] == d);
+                let (Some(mine), Some(other)) = (mine, other) else {
+                    ok = false;
+                    break;
+                };
+                let want = rel[mine.face.idx()] ^ (mine.forward == other.forward);
+                let x = want ^ rel[other.face.idx()];
+                if *flip.get_or_insert(x) != x {
+                    ok = false;
+                    break;
+                }
+            }
+            if !ok {
+                continue;
+            }
+            let x = flip.unwrap_or(false);
+            let moved = std::mem::take(&mut comps[d]);
+            for &f in &moved {
+                comp[f.idx()] = c;
+                rel[f.idx()] ^= x;
+            }
+            comps[c].extend(moved);
+            closed_union[c] = true;
+            break;
+        }
+    }
+    closed_union
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Reason {
     None,
@@ -501,6 +624,7 @@ fn decide(
     samples: &[Option<Sample>],
     c: usize,
     members: &[FaceId],
+    closed_union: bool,
     objects: &Objects,
     object_of: &[usize],
     opts: &Options,
@@ -513,13 +637,15 @@ fn decide(
     if total_area <= 0.0 {
         return (1, Reason::None);
     }
-    // Closed: every edge of every member has exactly two uses, both in this component.
-    let closed = members.iter().all(|&f| {
-        mesh.face_edges(f).iter().all(|&e| {
-            let u = &mesh.edge(e).uses;
-            u.len() == 2 && u.iter().all(|x| comp[x.face.idx()] == c)
-        })
-    });
+    // Closed: every edge of every member has exactly two uses, both in this
+    // component (or two components that close each other, see `close_pairs`).
+    let closed = closed_union
+        || members.iter().all(|&f| {
+            mesh.face_edges(f).iter().all(|&e| {
+                let u = &mesh.edge(e).uses;
+                u.len() == 2 && u.iter().all(|x| comp[x.face.idx()] == c)
+            })
+        });
     if closed {
         let mut vol = 0.0;
         for &f in members {
