@@ -200,6 +200,60 @@ struct Divisions {
     /// vertex id): the feet of the face's own vertices that lie across a
     /// thin part of it (see [`feet`]).
     feet: FxHashMap<(VertexId, VertexId), Vec<f64>>,
+    /// Every edge of the faces (lower vertex id first), sorted, and per
+    /// vertex the edges that end there: `edges[ends[start[v]..start[v + 1]]]`
+    /// (see [`Ctx::divided`]).
+    edges: Vec<(VertexId, VertexId)>,
+    start: Vec<u32>,
+    ends: Vec<u32>,
+}
+
+/// Every edge of the top-level faces, lower vertex id first, sorted, and
+/// per vertex the indices of the edges that end there (CSR: `start` has
+/// one entry per vertex and one more).
+fn edges_at_vertices(m: &Model) -> (Vec<(VertexId, VertexId)>, Vec<u32>, Vec<u32>) {
+    let n: usize = m
+        .top_faces()
+        .map(|f| {
+            m.faces[f.idx()]
+                .contours
+                .iter()
+                .map(Vec::len)
+                .sum::<usize>()
+        })
+        .sum();
+    let mut edges: Vec<(VertexId, VertexId)> = Vec::with_capacity(n);
+    for f in m.top_faces() {
+        for c in &m.faces[f.idx()].contours {
+            for i in 0..c.len() {
+                let (a, b) = (c[i], c[(i + 1) % c.len()]);
+                if a != b {
+                    edges.push(if a < b { (a, b) } else { (b, a) });
+                }
+            }
+        }
+    }
+    edges.sort_unstable();
+    edges.dedup();
+    edges.shrink_to_fit();
+    let nv = m.vertices.len();
+    let mut start = vec![0u32; nv + 1];
+    for &(a, b) in &edges {
+        start[a.idx() + 1] += 1;
+        start[b.idx() + 1] += 1;
+    }
+    for i in 0..nv {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut ends = vec![0u32; start[nv] as usize];
+    for (k, &(a, b)) in edges.iter().enumerate() {
+        for v in [a, b] {
+            ends[fill[v.idx()] as usize] = k as u32;
+            fill[v.idx()] += 1;
+        }
+    }
+    (edges, start, ends)
 }
 
 /// Across this many epsilons a face is thin: a vertex nearer than this to
@@ -375,9 +429,34 @@ impl Ctx<'_> {
             let gap = 2.0 * self.opts.eps / l;
             feet.dedup_by(|b, a| *b - *a <= gap);
             let clear = (0.25 / k as f64).max(gap);
+            // Two edges that leave one vertex nearly along each other (a
+            // wall's end face tilted by welding across a strip a few
+            // epsilons wide) stay within epsilon of each other for metres:
+            // a division point on one would be a T-vertex on the other, and
+            // the strip between them, divided on one side only, would be
+            // cut into needles. A division point within THIN epsilons of an
+            // edge sharing an end with its own is left out (the feet
+            // already are, in `feet`): such edges are not divided there.
+            let reach = THIN * self.opts.eps;
+            let clear_of_others = |t: f64| {
+                let x = p + (q - p) * t;
+                [key.0, key.1].iter().all(|v| {
+                    let d = &self.div;
+                    d.ends[d.start[v.idx()] as usize..d.start[v.idx() + 1] as usize]
+                        .iter()
+                        .all(|&j| {
+                            let other = d.edges[j as usize];
+                            other == key || {
+                                let (a, b) = (self.pos(other.0), self.pos(other.1));
+                                geom::point_segment_distance(x, a, b).0 > reach
+                            }
+                        })
+                })
+            };
             let mut ts: Vec<(f64, bool)> = (1..k)
                 .map(|i| i as f64 / k as f64)
                 .filter(|t| feet.iter().all(|f| (f - t).abs() > clear))
+                .filter(|&t| clear_of_others(t))
                 .map(|t| (t, false))
                 .chain(feet.iter().map(|&t| (t, true)))
                 .collect();
@@ -435,9 +514,15 @@ pub fn cut(m: &Model, opts: Options) -> Result<(Model, Stats), String> {
             .filter_map(|f| f.name.clone())
             .chain(m.wires.iter().filter_map(|w| w.name.clone()))
             .collect(),
-        div: Divisions {
-            map: FxHashMap::default(),
-            feet: feet(m, opts.eps),
+        div: {
+            let (edges, start, ends) = edges_at_vertices(m);
+            Divisions {
+                map: FxHashMap::default(),
+                feet: feet(m, opts.eps),
+                edges,
+                start,
+                ends,
+            }
         },
     };
     let mut out = Model {
