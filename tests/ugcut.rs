@@ -306,8 +306,27 @@ fn thin_strips_are_cut_across_without_needles() {
 /// was cut into needles. Such edges are not divided there now.
 #[test]
 fn edges_leaving_a_vertex_nearly_along_each_other_are_not_divided() {
-    let input = std::fs::read(fixture("cut/tilted-end.ug")).unwrap();
-    let eps = "8.395865e-6";
+    cuts_cleanly("cut/tilted-end.ug", "8.395865e-6", &["0.7", "0.2", "0.05"]);
+}
+
+/// A wall's end 13.8 epsilon wide with two vertices 0.86 mm apart on one
+/// side (fixtures/cut/narrow-wall-end.ug, from the CAD building of seed 191
+/// with 3 × 2 rooms): the triangle from that short segment to the far
+/// corner was a needle (2 defects at every length). Vertices within 16
+/// epsilon (8 before) of the opposite side now get their foot there.
+#[test]
+fn a_strip_under_sixteen_epsilon_wide_is_cut_across() {
+    cuts_cleanly(
+        "cut/narrow-wall-end.ug",
+        "1.481811e-5",
+        &["0.7", "0.2", "2%"],
+    );
+}
+
+/// ugcut of the fixture at each length: only sound patches, no
+/// intersecting pair, the area of every material kept.
+fn cuts_cleanly(name: &str, eps: &str, lens: &[&str]) {
+    let input = std::fs::read(fixture(name)).unwrap();
     let before = serde_json::from_str::<serde_json::Value>(&run_ok(
         "ugcheck",
         &["--json", "-e", eps],
@@ -320,7 +339,7 @@ fn edges_leaving_a_vertex_nearly_along_each_other_are_not_divided() {
         .iter()
         .map(|m| m["area"].as_f64().unwrap())
         .collect();
-    for len in ["0.7", "0.2", "0.05"] {
+    for &len in lens {
         let out = run_ok("ugcut", &["-e", eps, "-l", len], Some(&input));
         let r: serde_json::Value = serde_json::from_str(&run_ok(
             "ugcheck",
@@ -340,7 +359,7 @@ fn edges_leaving_a_vertex_nearly_along_each_other_are_not_divided() {
         // (The welded faces are planar to within epsilon only: their
         // patches' areas differ from theirs by a few 1e-9, as before.)
         for (a, b) in got.iter().zip(&want) {
-            assert!((a - b).abs() <= 1e-8 * b, "-l {len}: {a} vs {b}");
+            assert!((a - b).abs() <= 1e-8 * b, "{name} -l {len}: {a} vs {b}");
         }
     }
 }
