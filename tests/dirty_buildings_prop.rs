@@ -29,7 +29,22 @@ use ug::Model;
 
 /// The size of seed `s`'s building: one room on one storey, every fourth
 /// seed two storeys, every eighth two rooms a storey.
+/// (`UG_CAD=X,Y,S` sets rooms along x and y and storeys for every seed:
+/// for [`more_seeds`] by hand.)
 fn config(seed: u64) -> Cad {
+    if let Ok(v) = std::env::var("UG_CAD") {
+        let n: Vec<usize> = v
+            .split(',')
+            .map(|x| x.parse().expect("UG_CAD is X,Y,S"))
+            .collect();
+        assert_eq!(n.len(), 3, "UG_CAD is X,Y,S");
+        return Cad {
+            rooms_x: n[0],
+            rooms_y: n[1],
+            storeys: n[2],
+            ..Cad::default()
+        };
+    }
     Cad {
         storeys: 1 + usize::from(seed % 4 == 3),
         rooms_x: 1 + usize::from(seed % 8 == 5),
@@ -227,7 +242,8 @@ fn dirty_buildings_regression_seeds() {
 }
 
 /// More seeds by hand: `UG_SEEDS=200..1200 cargo test --release --test
-/// dirty_buildings_prop -- --ignored more_seeds` (default 200..400).
+/// dirty_buildings_prop -- --ignored more_seeds` (default 200..400); with
+/// `UG_CAD=3,2,2` every seed is a building of 3 × 2 rooms on 2 storeys.
 #[test]
 #[ignore]
 fn more_seeds() {
