@@ -7,6 +7,21 @@ fn check(text: &str) -> serde_json::Value {
     serde_json::from_str(&run_ok("ugcheck", &["--json"], Some(text.as_bytes()))).unwrap()
 }
 
+/// ugcheck's report of `input` with epsilon `eps`.
+fn check_eps(input: &[u8], eps: &str) -> serde_json::Value {
+    serde_json::from_str(&run_ok("ugcheck", &["--json", "-e", eps], Some(input))).unwrap()
+}
+
+/// The area of each material in a report.
+fn areas(r: &serde_json::Value) -> Vec<f64> {
+    r["area_by_material"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["area"].as_f64().unwrap())
+        .collect()
+}
+
 fn count(r: &serde_json::Value, key: &str) -> usize {
     r[key].as_array().unwrap().len()
 }
@@ -273,29 +288,12 @@ fn a_wall_jittered_by_one_ulp_is_meshed() {
 /// which ugcheck counts as degenerate and ugrad leaves out.
 #[test]
 fn thin_strips_are_cut_across_without_needles() {
-    let input = std::fs::read(fixture("cut/thin-strips.ug")).unwrap();
-    let before = serde_json::from_str::<serde_json::Value>(&run_ok(
-        "ugcheck",
-        &["--json", "-e", "1e-4"],
-        Some(&input),
-    ))
-    .unwrap();
-    let want = before["area_by_material"][0]["area"].as_f64().unwrap();
-    for len in ["0.5", "0.2", "2%", "0.05"] {
-        let out = run_ok("ugcut", &["-e", "1e-4", "-l", len], Some(&input));
-        let r: serde_json::Value = serde_json::from_str(&run_ok(
-            "ugcheck",
-            &["--json", "-e", "1e-4"],
-            Some(out.as_bytes()),
-        ))
-        .unwrap();
-        assert_only_sound_patches(&r, len);
-        let area = r["area_by_material"][0]["area"].as_f64().unwrap();
-        assert!(
-            (area - want).abs() <= 1e-9 * want,
-            "-l {len}: {area} vs {want}"
-        );
-    }
+    cuts_cleanly(
+        "cut/thin-strips.ug",
+        "1e-4",
+        &["0.5", "0.2", "2%", "0.05"],
+        1e-9,
+    );
 }
 
 /// Two edges that leave one vertex nearly along each other
@@ -306,7 +304,14 @@ fn thin_strips_are_cut_across_without_needles() {
 /// was cut into needles. Such edges are not divided there now.
 #[test]
 fn edges_leaving_a_vertex_nearly_along_each_other_are_not_divided() {
-    cuts_cleanly("cut/tilted-end.ug", "8.395865e-6", &["0.7", "0.2", "0.05"]);
+    // (The welded faces are planar to within epsilon only: their patches'
+    // areas differ from theirs by a few 1e-9, as before.)
+    cuts_cleanly(
+        "cut/tilted-end.ug",
+        "8.395865e-6",
+        &["0.7", "0.2", "0.05"],
+        1e-8,
+    );
 }
 
 /// A wall's end 13.8 epsilon wide with two vertices 0.86 mm apart on one
@@ -320,46 +325,25 @@ fn a_strip_under_sixteen_epsilon_wide_is_cut_across() {
         "cut/narrow-wall-end.ug",
         "1.481811e-5",
         &["0.7", "0.2", "2%"],
+        1e-8,
     );
 }
 
-/// ugcut of the fixture at each length: only sound patches, no
-/// intersecting pair, the area of every material kept.
-fn cuts_cleanly(name: &str, eps: &str, lens: &[&str]) {
+/// ugcut of the fixture at each length (with epsilon `eps`): only sound
+/// patches, no intersecting pair, the area of every material kept to `tol`
+/// (relative).
+fn cuts_cleanly(name: &str, eps: &str, lens: &[&str], tol: f64) {
     let input = std::fs::read(fixture(name)).unwrap();
-    let before = serde_json::from_str::<serde_json::Value>(&run_ok(
-        "ugcheck",
-        &["--json", "-e", eps],
-        Some(&input),
-    ))
-    .unwrap();
-    let want: Vec<f64> = before["area_by_material"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|m| m["area"].as_f64().unwrap())
-        .collect();
+    let want = areas(&check_eps(&input, eps));
     for &len in lens {
         let out = run_ok("ugcut", &["-e", eps, "-l", len], Some(&input));
-        let r: serde_json::Value = serde_json::from_str(&run_ok(
-            "ugcheck",
-            &["--json", "-e", eps],
-            Some(out.as_bytes()),
-        ))
-        .unwrap();
+        let r = check_eps(out.as_bytes(), eps);
         assert_only_sound_patches(&r, len);
         assert_eq!(count(&r, "intersecting"), 0, "-l {len}");
-        let got: Vec<f64> = r["area_by_material"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|m| m["area"].as_f64().unwrap())
-            .collect();
+        let got = areas(&r);
         assert_eq!(got.len(), want.len());
-        // (The welded faces are planar to within epsilon only: their
-        // patches' areas differ from theirs by a few 1e-9, as before.)
         for (a, b) in got.iter().zip(&want) {
-            assert!((a - b).abs() <= 1e-8 * b, "{name} -l {len}: {a} vs {b}");
+            assert!((a - b).abs() <= tol * b, "{name} -l {len}: {a} vs {b}");
         }
     }
 }
