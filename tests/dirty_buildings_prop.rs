@@ -235,10 +235,14 @@ fn dirty_buildings_seeds_150_to_199() {
 ///   which the vote turned inside out), against the wall face flush with it;
 /// * 326, 573: T-vertices after ugcut where a pier's end face, tilted by
 ///   the weld across a strip 1.3 epsilon wide, leaves a vertex nearly along
-///   the strip's side (fixtures/cut/tilted-end.ug).
+///   the strip's side (fixtures/cut/tilted-end.ug);
+/// * 367: a wall's end about 2 epsilon in front of the facade, its piece
+///   tilted onto the slab's vertices across the strip between, then pieces
+///   of the two coplanar only after ugcut
+///   (fixtures/copl/wall-end-past-slab.ug).
 #[test]
 fn dirty_buildings_regression_seeds() {
-    run(vec![228, 326, 556, 573]);
+    run(vec![228, 326, 367, 556, 573]);
 }
 
 /// More seeds by hand: `UG_SEEDS=200..1200 cargo test --release --test

@@ -303,3 +303,34 @@ fn pairs_among_marked_faces_are_the_full_search_filtered() {
     }
     assert_eq!(check::coplanar_pairs_with(&geoms, eps, None), all);
 }
+
+/// A wall's end 1.9 to 2.04 epsilon in front of the facade and the slabs'
+/// ends (fixtures/copl/wall-end-past-slab.ug, from the CAD building of seed
+/// 367). ugcopl took the slab's vertices as corners of the wall end's
+/// piece, which then crossed the 2-epsilon strip of the wall's side between
+/// the planes (1 intersecting pair after ugclean). Its corners are now its
+/// own or within epsilon of its plane, and ugcopl and ugclean take faces up
+/// to 3 epsilon apart as coplanar: the end and the pier, 2.04 epsilon apart
+/// at one vertex, were not coplanar as wholes, but pieces of them after
+/// ugcut were (104 to 510 overlapping pairs).
+#[test]
+fn a_face_two_epsilon_in_front_of_another_is_resolved_for_every_cut() {
+    let eps = "8.630463e-6";
+    let check_eps = |text: &str| -> serde_json::Value {
+        serde_json::from_str(&run_ok(
+            "ugcheck",
+            &["-e", eps, "--json"],
+            Some(text.as_bytes()),
+        ))
+        .unwrap()
+    };
+    let input = std::fs::read(fixture("copl/wall-end-past-slab.ug")).unwrap();
+    let copl = run_ok("ugcopl", &["-e", eps], Some(&input));
+    let clean = run_ok("ugclean", &["-e", eps], Some(copl.as_bytes()));
+    assert_eq!(defects(&check_eps(&clean)), 0, "after ugclean");
+    for len in ["2%", "0.2", "0.05"] {
+        let cut = run_ok("ugcut", &["-e", eps, "-l", len], Some(clean.as_bytes()));
+        let r = check_eps(&cut);
+        assert_eq!(defects(&r), 0, "after ugcut -l {len}: {r}");
+    }
+}

@@ -792,6 +792,18 @@ pub fn coplanar_pairs_with(
     classify(geoms, eps, Want::Coplanar, among)
 }
 
+/// [`coplanar_pairs_with`] taking faces up to `epsilons` × `eps` apart as
+/// coplanar (the tools that resolve them look further than the check:
+/// [`geom::intersect::CLEAN_COPLANAR_EPSILONS`]).
+pub fn coplanar_pairs_within(
+    geoms: &[Option<FaceGeom>],
+    eps: f64,
+    among: Option<&[bool]>,
+    epsilons: f64,
+) -> Vec<(usize, usize, PairKind)> {
+    classify_within(geoms, eps, Want::Coplanar, among, epsilons)
+}
+
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Want {
     All,
@@ -815,13 +827,26 @@ fn classify(
     want: Want,
     among: Option<&[bool]>,
 ) -> Vec<(usize, usize, PairKind)> {
+    classify_within(geoms, eps, want, among, geom::intersect::COPLANAR_EPSILONS)
+}
+
+/// [`classify`] with coplanar meaning within `epsilons` × `eps`.
+fn classify_within(
+    geoms: &[Option<FaceGeom>],
+    eps: f64,
+    want: Want,
+    among: Option<&[bool]>,
+    epsilons: f64,
+) -> Vec<(usize, usize, PairKind)> {
+    // Boxes grown by half the coplanar distance meet for every pair within it.
+    let pad = eps.max(0.5 * epsilons * eps);
     let marked = |k: u32| among.is_none_or(|a| a.get(k as usize).copied().unwrap_or(false));
     let boxes: Vec<(DVec3, DVec3, u32)> = geoms
         .iter()
         .enumerate()
         .filter_map(|(k, g)| {
             g.as_ref().map(|g| {
-                let (lo, hi) = geom::index::bbox(g.contours.iter().flatten().copied(), eps);
+                let (lo, hi) = geom::index::bbox(g.contours.iter().flatten().copied(), pad);
                 (lo, hi, k as u32)
             })
         })
@@ -849,7 +874,7 @@ fn classify(
                     .as_ref()
                     .expect("indexed faces have geometry");
                 let rel = if want == Want::Coplanar {
-                    if geom::intersect::coplanar(ga, gb, eps) {
+                    if geom::intersect::coplanar_within(ga, gb, epsilons * eps) {
                         Relation::Coplanar
                     } else {
                         Relation::Disjoint

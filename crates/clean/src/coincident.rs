@@ -1,7 +1,8 @@
 //! Coincident face removal (Smith 1991, §2.6).
 //!
 //! Two faces are coincident when they are coplanar, cover the same region
-//! and face the same way (`ugcheck`'s definition; faces back to back — the
+//! and face the same way (`ugcheck`'s definition, coplanar meaning within
+//! [`geom::intersect::CLEAN_COPLANAR_EPSILONS`] as in `ugcopl`; faces back to back — the
 //! two sides of a zero-thickness wall — are not). Of every coincident pair
 //! one face is removed:
 //!
@@ -123,11 +124,12 @@ pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
             .map(|c| c.iter().map(|&v| m.pos(v)).collect())
             .collect()
     };
-    let pairs: Vec<(usize, usize)> = check::coplanar_pairs(&geoms, eps)
-        .into_iter()
-        .filter(|p| p.2 == PairKind::Coincident)
-        .map(|(i, j, _)| (i, j))
-        .collect();
+    let pairs: Vec<(usize, usize)> =
+        check::coplanar_pairs_within(&geoms, eps, None, geom::intersect::CLEAN_COPLANAR_EPSILONS)
+            .into_iter()
+            .filter(|p| p.2 == PairKind::Coincident)
+            .map(|(i, j, _)| (i, j))
+            .collect();
     let mut stats = Stats {
         pairs: pairs.len(),
         ..Stats::default()

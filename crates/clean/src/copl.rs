@@ -10,7 +10,14 @@
 //! region comes out as a piece of every face it belongs to, on the same
 //! vertices, so `ugclean` can drop one of each coincident pair.
 //!
-//! Piece corners within epsilon of an existing vertex reuse it; new corners
+//! Faces count as coplanar here up to
+//! [`geom::intersect::CLEAN_COPLANAR_EPSILONS`] (3) epsilon apart, more than
+//! the 2 that `ugcheck` judges by: pieces of a face have fewer vertices than
+//! the face, so a pair that is not coplanar as wholes may be after a cut.
+//!
+//! Piece corners within epsilon of an existing vertex reuse it (a
+//! neighbour's vertex only when it lies within epsilon of this face's
+//! plane: one further off would tilt the piece); new corners
 //! (crossings of the faces' edges) are shared between all faces that find
 //! them. Each piece keeps its face's material and orientation, is named
 //! `NAME.c1`, `NAME.c2`, …, and is preceded by the origin annotation
@@ -107,7 +114,7 @@ fn contact_pairs(
     eps: f64,
     ratio: f64,
 ) -> Vec<Contact> {
-    let tol = geom::intersect::COPLANAR_EPSILONS * eps;
+    let tol = geom::intersect::CLEAN_COPLANAR_EPSILONS * eps;
     if ratio <= 0.0 {
         return Vec::new();
     }
@@ -366,11 +373,16 @@ fn copl_once(
             .map(|f| a.get(f.idx()).copied().unwrap_or(true))
             .collect()
     });
-    let pairs: Vec<(usize, usize)> = check::coplanar_pairs_with(&geoms, eps, among.as_deref())
-        .into_iter()
-        .filter(|p| matches!(p.2, PairKind::Overlap(_)))
-        .map(|(i, j, _)| (i, j))
-        .collect();
+    let pairs: Vec<(usize, usize)> = check::coplanar_pairs_within(
+        &geoms,
+        eps,
+        among.as_deref(),
+        geom::intersect::CLEAN_COPLANAR_EPSILONS,
+    )
+    .into_iter()
+    .filter(|p| matches!(p.2, PairKind::Overlap(_)))
+    .map(|(i, j, _)| (i, j))
+    .collect();
     let contacts = contact_pairs(&geoms, eps, contact);
     let mut stats = Stats {
         pairs: pairs.len(),
@@ -408,19 +420,37 @@ fn copl_once(
                 4.0 * eps,
             );
             let (lo, hi) = (lo.truncate(), hi.truncate());
+            // A neighbour's vertex is a corner of this face's pieces only
+            // when it lies within epsilon of this face's plane (or is this
+            // face's own): "coplanar" reaches 2 epsilon, and a corner taken
+            // from a neighbour 2 epsilon off would tilt the piece (a wall's
+            // end 2 epsilon past a slab's end, its piece on the slab's
+            // vertices, crossed the thin strip of the wall's side between
+            // the two ends; seed 367 of the dirty-building property). Such
+            // a point is a fresh one in this face's plane.
+            let own: rustc_hash::FxHashSet<ug::VertexId> = m.faces[faces[k].idx()]
+                .contours
+                .iter()
+                .flatten()
+                .copied()
+                .collect();
             for (t, &j) in others[k].iter().enumerate() {
                 let tag = Tag::Toggle(t as u32 + 1);
                 let cs = &m.faces[faces[j].idx()].contours;
                 for c in cs {
                     let ring: Vec<(geom::DVec2, Option<ug::VertexId>)> = c
                         .iter()
-                        .map(|&v| (g.frame.to_2d(pos(v)), Some(v)))
+                        .map(|&v| {
+                            let p = pos(v);
+                            let near = own.contains(&v) || g.plane.dist(p).abs() <= eps;
+                            (g.frame.to_2d(p), near.then_some(v))
+                        })
                         .collect();
                     if ring
                         .iter()
                         .all(|p| p.0.cmpge(lo).all() && p.0.cmple(hi).all())
                     {
-                        layout.contours(std::slice::from_ref(c), tag, pos);
+                        layout.ring(&ring, tag);
                     } else {
                         layout.ring(&winged::pieces::clip_ring(&ring, lo, hi), tag);
                     }

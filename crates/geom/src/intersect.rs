@@ -189,10 +189,24 @@ pub const COPLANAR_EPSILONS: f64 = 2.0;
 /// jittered by a fraction of epsilon, has a normal tilted by degrees, and
 /// it still lies in the plane within tolerance.
 pub fn coplanar(a: &FaceGeom, b: &FaceGeom, eps: f64) -> bool {
+    coplanar_within(a, b, COPLANAR_EPSILONS * eps)
+}
+
+/// How far apart the tools that resolve coplanar faces (`ugcopl`,
+/// `ugclean`) still take two faces as coplanar, in epsilons: more than the
+/// [`COPLANAR_EPSILONS`] that `ugcheck` judges by. The test looks at every
+/// vertex of a face, and a piece of a face has fewer: two parallel faces
+/// 1.9 to 2.04 epsilon apart (a wall's end and the facade a hair behind
+/// it, jittered) are not coplanar as wholes, but some of their pieces after
+/// `ugcut` are, and they overlap. Resolving every pair within 3 epsilon
+/// leaves none that a later cut can bring within 2.
+pub const CLEAN_COPLANAR_EPSILONS: f64 = 3.0;
+
+/// [`coplanar`] with the distance tolerance `tol` (absolute).
+pub fn coplanar_within(a: &FaceGeom, b: &FaceGeom, tol: f64) -> bool {
     if a.plane.n.dot(b.plane.n).abs() < 0.9 {
         return false;
     }
-    let tol = COPLANAR_EPSILONS * eps;
     let within = |g: &FaceGeom, other: &FaceGeom| {
         g.contours
             .iter()
