@@ -144,6 +144,9 @@ impl Bvh {
             return;
         }
         let inv = DVec3::ONE / dir;
+        let Some(frame) = RayFrame::new(dir) else {
+            return; // no triangle can be hit
+        };
         let root = &self.nodes[0];
         let Some(t0) = slab_entry(root.lo, root.hi, origin, inv, tmin, *tmax) else {
             return;
@@ -166,7 +169,7 @@ impl Bvh {
                     if !keep(t.id) {
                         continue;
                     }
-                    if let Some(tt) = ray_triangle(origin, dir, t)
+                    if let Some(tt) = ray_triangle_with(origin, &frame, t)
                         && tt > tmin
                         && tt < *tmax
                     {
@@ -522,25 +525,61 @@ fn slab_entry_finite(
 /// triangles: a blocker's own surface leaked light to points it hides.)
 #[inline]
 pub fn ray_triangle(o: DVec3, d: DVec3, t: &Triangle) -> Option<f64> {
-    // The axis along which the direction is largest becomes z.
-    let a = d.abs();
-    let kz = if a.x >= a.y && a.x >= a.z {
-        0
-    } else if a.y >= a.z {
-        1
-    } else {
-        2
-    };
-    let mut kx = (kz + 1) % 3;
-    let mut ky = (kx + 1) % 3;
-    if d[kz] < 0.0 {
-        std::mem::swap(&mut kx, &mut ky); // keep the frame's handedness
+    ray_triangle_with(o, &RayFrame::new(d)?, t)
+}
+
+/// What [`ray_triangle`] needs of a ray's direction, computed once a ray
+/// rather than once a triangle (three divisions and the choice of axes):
+/// the same arithmetic, so the same answers bit for bit.
+#[derive(Clone, Copy, Debug)]
+pub struct RayFrame {
+    kx: usize,
+    ky: usize,
+    kz: usize,
+    sx: f64,
+    sy: f64,
+    sz: f64,
+}
+
+impl RayFrame {
+    /// The frame of direction `d`; `None` when the ray can hit nothing
+    /// (a zero or non-finite direction).
+    #[inline]
+    pub fn new(d: DVec3) -> Option<RayFrame> {
+        // The axis along which the direction is largest becomes z.
+        let a = d.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        if d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky); // keep the frame's handedness
+        }
+        if d[kz] == 0.0 || !d[kz].is_finite() {
+            return None;
+        }
+        Some(RayFrame {
+            kx,
+            ky,
+            kz,
+            sx: d[kx] / d[kz],
+            sy: d[ky] / d[kz],
+            sz: 1.0 / d[kz],
+        })
     }
-    if d[kz] == 0.0 || !d[kz].is_finite() {
-        return None;
-    }
-    let (sx, sy, sz) = (d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
-    let rel = |p: DVec3| p - o;
+}
+
+/// [`ray_triangle`] for a ray from `o` whose direction's frame is `f`.
+#[inline]
+pub fn ray_triangle_with(o: DVec3, f: &RayFrame, t: &Triangle) -> Option<f64> {
+    let (kx, ky, kz) = (f.kx, f.ky, f.kz);
+    let (sx, sy, sz) = (f.sx, f.sy, f.sz);
+    let rel = |p: DVec3| (p - o).to_array();
     let (pa, pb, pc) = (rel(t.p[0]), rel(t.p[1]), rel(t.p[2]));
     let (ax, ay) = (pa[kx] - sx * pa[kz], pa[ky] - sy * pa[kz]);
     let (bx, by) = (pb[kx] - sx * pb[kz], pb[ky] - sy * pb[kz]);

@@ -1,7 +1,9 @@
 //! Which vertices a shooter sees: the [`Visibility`] trait and its CPU
 //! ray-cast implementation (the reference, and the fallback without a GPU).
 
-use geom::bvh::{Node, Triangle, build_nodes, push_children, ray_triangle, slab_entry};
+use geom::bvh::{
+    Node, RayFrame, Triangle, build_nodes, push_children, ray_triangle_with, slab_entry,
+};
 use glam::DVec3;
 use libmesh::{Mesh, SurfaceId, VertId};
 use rayon::prelude::*;
@@ -189,6 +191,7 @@ impl RayVisibility {
             return None;
         }
         let inv = DVec3::ONE / dir;
+        let frame = RayFrame::new(dir)?;
         let root = &self.nodes[0];
         let t0 = slab_entry(root.lo, root.hi, origin, inv, tmin, tmax)?;
         // Nearer child first: a ray toward a vertex in another room is
@@ -211,7 +214,7 @@ impl RayVisibility {
                     if !keep(t.surface) {
                         continue;
                     }
-                    if let Some(tt) = ray_triangle(origin, dir, &self.triangle(t))
+                    if let Some(tt) = ray_triangle_with(origin, &frame, &self.triangle(t))
                         && tt > tmin
                         && tt < tmax
                     {
