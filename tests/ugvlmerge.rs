@@ -380,3 +380,76 @@ fn instances_are_flattened_then_grouped() {
     assert_eq!(out.lines().filter(|l| l.starts_with("v ")).count(), 4);
     assert!(!out.contains("def ") && !out.contains("i t"), "{out}");
 }
+
+/// Contours that cross themselves into lobes of equal and opposite area
+/// (fixtures/vlmerge/bow-tie.ug: a quad with two corners swapped, a figure
+/// eight): no Newell area, yet they span a plane. They were dropped as
+/// collinear; they are repaired into their even-odd region (the bow-tie's
+/// two triangles, the figure eight's rectangle), and ugcheck names them
+/// for what they are. The truly collinear face is still dropped.
+#[test]
+fn bow_ties_are_repaired_not_dropped() {
+    let p = path("vlmerge/bow-tie.ug");
+    let text = std::fs::read_to_string(&p).unwrap();
+    let before = check(&text, None);
+    let reasons: Vec<String> = before["degenerate"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| {
+            format!(
+                "{} {}",
+                d["face"].as_str().unwrap(),
+                d["reason"].as_str().unwrap()
+            )
+        })
+        .collect();
+    assert_eq!(
+        reasons,
+        [
+            "bowtie contour 1 crosses itself (its lobes' areas cancel)",
+            "eight contour 1 crosses itself (its lobes' areas cancel)",
+            "line zero area (its vertices are collinear)",
+        ]
+    );
+    let o = run("ugvlmerge", &[&p], None);
+    assert!(o.status.success());
+    let err = String::from_utf8(o.stderr).unwrap();
+    assert!(
+        err.contains("face line: zero area (its vertices are collinear); dropped"),
+        "{err}"
+    );
+    assert!(err.contains("face bowtie: its contours cross"), "{err}");
+    assert!(err.contains("face eight: its contours cross"), "{err}");
+    let out = String::from_utf8(o.stdout).unwrap();
+    let r = check(&out, None);
+    for k in [
+        "degenerate",
+        "intersecting",
+        "overlapping",
+        "nonplanar",
+        "tvertices",
+    ] {
+        assert_eq!(len(&r, k), 0, "{k}: {r}");
+    }
+    // The even-odd regions: the bow-tie's lobes (2 × 1/4), the figure
+    // eight's rectangle (2 × 0.5); the floor as it was.
+    let got = areas(&r);
+    let want = [("floor", 16.0), ("tie", 0.5), ("eight", 1.0)];
+    for (m, a) in want {
+        let g = got.iter().find(|x| x.0 == m).map(|x| x.1);
+        assert!(
+            g.is_some_and(|g| (g - a).abs() < 1e-9),
+            "{m}: {g:?} against {a}"
+        );
+    }
+    let tie: Vec<&str> = faces(&out)
+        .into_iter()
+        .filter(|f| f.ends_with(" tie;"))
+        .collect();
+    assert_eq!(tie.len(), 2, "{tie:?}");
+    // ugcut meshes them too, and ugrad takes them as they come.
+    let cut = run_ok("ugcut", &["-l", "0.5", &p], None);
+    let r = check(&cut, None);
+    assert_eq!(len(&r, "degenerate"), 0, "{r}");
+}

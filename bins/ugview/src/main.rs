@@ -56,7 +56,8 @@ struct Args {
     #[arg(long, value_name = "H", allow_hyphen_values = true)]
     cut_z: Option<f64>,
     /// Exposure in stops: radiance × 2^STOPS, 1.0 is white. Default: automatic
-    /// (log-average luminance → middle grey).
+    /// (log-average luminance of the lit pixels → middle grey: the unlit
+    /// exterior of a building seen from outside does not count).
     #[arg(long, value_name = "STOPS", allow_hyphen_values = true)]
     exposure: Option<f64>,
     /// Tone mapping after exposure.

@@ -516,7 +516,12 @@ fn face_checks(cx: &Ctx<'_>, f: FaceId) -> FaceFindings {
     let size = (hi - lo).length();
     let outer_area = geom::newell_normal(&pts[0]).length() / 2.0;
     if reason.is_none() && outer_area <= eps * eps {
-        reason = Some("zero area (its vertices are collinear)".to_string());
+        reason = Some(if geom::spread_normal(&pts[0]).length() / 2.0 > eps * eps {
+            // Lobes of opposite winding and equal area (a bow-tie).
+            "contour 1 crosses itself (its lobes' areas cancel)".to_string()
+        } else {
+            "zero area (its vertices are collinear)".to_string()
+        });
     }
     if reason.is_none() {
         reason = shape_defect(cx, face, &pts, eps);

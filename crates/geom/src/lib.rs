@@ -16,6 +16,6 @@ pub mod triangulate;
 
 pub use glam::{DVec2, DVec3};
 pub use index::BoxIndex;
-pub use plane::{Frame, Plane, newell_normal};
+pub use plane::{Frame, Plane, contour_normal, newell_normal, spread_normal};
 pub use polygon::*;
 pub use predicates::*;

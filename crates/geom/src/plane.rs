@@ -21,6 +21,59 @@ pub fn newell_normal(pts: &[DVec3]) -> DVec3 {
     acc
 }
 
+/// A normal of the plane that a contour's points span, from three of its
+/// points far apart (the first, the one farthest from it, and the one
+/// farthest from the line through those two); its length is twice their
+/// triangle's area, zero when every point lies on one line. Unlike
+/// [`newell_normal`] it does not depend on the winding: a contour that
+/// crosses itself into lobes of opposite winding and equal area (a
+/// bow-tie, a quad exported with two corners swapped, a figure eight) has a
+/// Newell normal of nothing, but spans a plane.
+pub fn spread_normal(pts: &[DVec3]) -> DVec3 {
+    let Some(&a) = pts.first() else {
+        return DVec3::ZERO;
+    };
+    let far = |key: &dyn Fn(DVec3) -> f64| {
+        pts.iter()
+            .copied()
+            .fold((a, f64::NEG_INFINITY), |best, p| {
+                let k = key(p);
+                if k > best.1 { (p, k) } else { best }
+            })
+            .0
+    };
+    let b = far(&|p| (p - a).length_squared());
+    let ab = b - a;
+    let c = far(&|p| ab.cross(p - a).length_squared());
+    ab.cross(c - a)
+}
+
+/// The normal of a contour ([`newell_normal`]), or, where its lobes cancel
+/// (a Newell normal under 1e-9 of [`spread_normal`]), the spread normal,
+/// turned to agree with whatever the Newell normal has. The same as
+/// `newell_normal` for every contour whose winding encloses area.
+pub fn contour_normal(pts: &[DVec3]) -> DVec3 {
+    let n = newell_normal(pts);
+    let len = n.length();
+    // The spread normal is at most r² long (r: the farthest point from the
+    // first), so a Newell normal above 1e-9 r² needs no more.
+    let Some(&a) = pts.first() else {
+        return n;
+    };
+    let r2 = pts
+        .iter()
+        .map(|&p| (p - a).length_squared())
+        .fold(0.0, f64::max);
+    if len.is_finite() && len > 1e-9 * r2 {
+        return n;
+    }
+    let s = spread_normal(pts);
+    if len.is_finite() && len > 1e-9 * s.length() {
+        return n;
+    }
+    if s.dot(n) < 0.0 { -s } else { s }
+}
+
 /// A plane `n·p = d` with unit normal `n`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Plane {
@@ -32,7 +85,7 @@ impl Plane {
     /// The best-fit plane of a contour: Newell normal through the centroid.
     /// `None` when the contour has no area (degenerate).
     pub fn fit(pts: &[DVec3]) -> Option<Plane> {
-        let n = newell_normal(pts);
+        let n = contour_normal(pts);
         let len = n.length();
         if len.is_nan() || len <= 0.0 || pts.is_empty() {
             return None;

@@ -39,9 +39,11 @@ pub fn face_area(contours: &[Vec<DVec3>]) -> f64 {
     contours.iter().map(|c| newell_normal(c).dot(n) / 2.0).sum()
 }
 
-/// Unit normal of a face (Newell, from the outer contour), or `None` when degenerate.
+/// Unit normal of a face (Newell, from the outer contour; the plane its
+/// points span where its lobes cancel: [`crate::plane::contour_normal`]),
+/// or `None` when degenerate.
 pub fn face_normal(contours: &[Vec<DVec3>]) -> Option<DVec3> {
-    let n = newell_normal(contours.first()?);
+    let n = crate::plane::contour_normal(contours.first()?);
     let len = n.length();
     (len > 0.0 && len.is_finite()).then(|| n / len)
 }

@@ -38,7 +38,11 @@ pub fn degeneracy(mesh: &Mesh, f: FaceId, eps: f64) -> Option<&'static str> {
     let size = (hi - lo).length();
     let area = newell_normal(&pts[0]).length() / 2.0;
     // NaN counts as no area.
-    if area.partial_cmp(&(eps * size)) != Some(std::cmp::Ordering::Greater) {
+    let none = |a: f64| a.partial_cmp(&(eps * size)) != Some(std::cmp::Ordering::Greater);
+    // A contour whose lobes cancel (a bow-tie: a quad with two corners
+    // swapped) has no Newell area but spans a plane: it is not degenerate
+    // but self-crossing, and the repair splits it into its lobes.
+    if none(area) && none(geom::spread_normal(&pts[0]).length() / 2.0) {
         return Some("zero area (its vertices are collinear)");
     }
     None
