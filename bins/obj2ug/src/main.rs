@@ -18,7 +18,8 @@ Examples:
 /// 'l' polylines wires; 'o'/'g' names become face names (sanitised to UG
 /// identifiers and made unique); 'usemtl' materials become defmat blocks with
 /// diffuse_rgb from Kd (0.8 grey when missing) and emission_rgb from a
-/// non-zero Ke. MTL files are resolved relative to the OBJ file. Degenerate
+/// non-zero Ke. MTL files are resolved relative to the OBJ file (one that
+/// cannot be read is a warning, an error with --strict). Degenerate
 /// faces are dropped with a warning; curves, surfaces and unknown statements
 /// are ignored with a warning (errors with --strict). Vertices are named
 /// v1, v2, ... in order of first use. Vertex colours ('v x y z r g b') are

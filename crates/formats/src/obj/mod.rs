@@ -567,16 +567,26 @@ pub fn convert_with(
                 };
                 for (name, t) in single {
                     let path: PathBuf = dir.join(&name);
-                    let bytes = read(&path).map_err(|e| {
-                        err_at(
-                            file,
-                            t,
-                            format!(
+                    // A library left behind by the exporter is common: its
+                    // materials then get the default grey, with a warning
+                    // (an error with --strict).
+                    let bytes = match read(&path) {
+                        Ok(b) => b,
+                        Err(e) => {
+                            let msg = format!(
                                 "cannot read material library {}: {e}",
                                 quote(name.as_bytes())
-                            ),
-                        )
-                    })?;
+                            );
+                            if opts.strict {
+                                return Err(err_at(file, t, msg));
+                            }
+                            warn.push(
+                                "mtllib",
+                                warn_at(file, t, format!("{msg}; its materials get diffuse 0.8")),
+                            );
+                            continue;
+                        }
+                    };
                     parse_mtl(&bytes, &path.display().to_string(), &mut mtl, &mut warn)?;
                 }
             }
@@ -950,8 +960,25 @@ mod tests {
             e("v 0 0 0\nf 1/x 1 1\n"),
             "t.obj:2:3: error: bad vertex reference '1/x'"
         );
+        // A missing library: a warning, its materials grey; an error with --strict.
+        let c = conv("mtllib  nope.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n").unwrap();
         assert_eq!(
-            e("mtllib  nope.mtl\n"),
+            c.warnings[0],
+            "t.obj:1:9: warning: cannot read material library 'nope.mtl': not found; its materials get diffuse 0.8"
+        );
+        assert!(
+            ug_text(&c).contains("diffuse_rgb 0.8 0.8 0.8;"),
+            "{}",
+            ug_text(&c)
+        );
+        let strict = Options {
+            strict: true,
+            ..Default::default()
+        };
+        assert_eq!(
+            conv_with("mtllib  nope.mtl\n", &[], &strict)
+                .unwrap_err()
+                .to_string(),
             "t.obj:1:9: error: cannot read material library 'nope.mtl': not found"
         );
         let c = conv_with(
