@@ -289,11 +289,13 @@ fn pairs_among_marked_faces_are_the_full_search_filtered() {
     let eps = cli::epsilon(None, &m);
     let (cut, _) = clean::isect::isect(&m, eps).expect("isect");
     let (_, geoms) = check::face_geoms(&cut);
-    let all = check::coplanar_pairs(&geoms, eps);
+    // As ugcopl looks for them.
+    const CLEAN: f64 = geom::intersect::CLEAN_COPLANAR_EPSILONS;
+    let all = check::coplanar_pairs(&geoms, eps, CLEAN);
     assert!(all.len() > 100, "{} pairs", all.len());
     for stride in [1, 3, 17] {
         let among: Vec<bool> = (0..geoms.len()).map(|k| k % stride == 0).collect();
-        let some = check::coplanar_pairs_with(&geoms, eps, Some(&among));
+        let some = check::coplanar_pairs_with(&geoms, eps, Some(&among), CLEAN);
         let want: Vec<_> = all
             .iter()
             .filter(|p| among[p.0] || among[p.1])
@@ -301,7 +303,7 @@ fn pairs_among_marked_faces_are_the_full_search_filtered() {
             .collect();
         assert_eq!(some, want, "every {stride}th face marked");
     }
-    assert_eq!(check::coplanar_pairs_with(&geoms, eps, None), all);
+    assert_eq!(check::coplanar_pairs_with(&geoms, eps, None, CLEAN), all);
 }
 
 /// A wall's end 1.9 to 2.04 epsilon in front of the facade and the slabs'

@@ -777,13 +777,26 @@ pub enum PairKind {
 /// degenerate face, which takes part in no pair. In order of (i, j), the same
 /// at any thread count.
 pub fn classify_pairs(geoms: &[Option<FaceGeom>], eps: f64) -> Vec<(usize, usize, PairKind)> {
-    classify(geoms, eps, Want::All, None)
+    classify(
+        geoms,
+        eps,
+        Want::All,
+        None,
+        geom::intersect::COPLANAR_EPSILONS,
+    )
 }
 
 /// The coplanar pairs only (overlapping, coincident, back to back: what
-/// `ugcopl` and `ugclean` act on); other pairs are not looked at.
-pub fn coplanar_pairs(geoms: &[Option<FaceGeom>], eps: f64) -> Vec<(usize, usize, PairKind)> {
-    classify(geoms, eps, Want::Coplanar, None)
+/// `ugcopl` and `ugclean` act on), faces up to `epsilons` × `eps` apart
+/// taken as coplanar (the tools that resolve them look further than the
+/// check: [`geom::intersect::CLEAN_COPLANAR_EPSILONS`]); other pairs are
+/// not looked at.
+pub fn coplanar_pairs(
+    geoms: &[Option<FaceGeom>],
+    eps: f64,
+    epsilons: f64,
+) -> Vec<(usize, usize, PairKind)> {
+    classify(geoms, eps, Want::Coplanar, None, epsilons)
 }
 
 /// [`coplanar_pairs`], and with `among` (per face) only the pairs with at
@@ -793,20 +806,9 @@ pub fn coplanar_pairs_with(
     geoms: &[Option<FaceGeom>],
     eps: f64,
     among: Option<&[bool]>,
-) -> Vec<(usize, usize, PairKind)> {
-    classify(geoms, eps, Want::Coplanar, among)
-}
-
-/// [`coplanar_pairs_with`] taking faces up to `epsilons` × `eps` apart as
-/// coplanar (the tools that resolve them look further than the check:
-/// [`geom::intersect::CLEAN_COPLANAR_EPSILONS`]).
-pub fn coplanar_pairs_within(
-    geoms: &[Option<FaceGeom>],
-    eps: f64,
-    among: Option<&[bool]>,
     epsilons: f64,
 ) -> Vec<(usize, usize, PairKind)> {
-    classify_within(geoms, eps, Want::Coplanar, among, epsilons)
+    classify(geoms, eps, Want::Coplanar, among, epsilons)
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -819,24 +821,21 @@ enum Want {
 /// The intersecting pairs only (what `ugisect` cuts): coplanar pairs are
 /// not measured.
 pub fn intersecting_pairs(geoms: &[Option<FaceGeom>], eps: f64) -> Vec<(usize, usize)> {
-    classify(geoms, eps, Want::Intersecting, None)
-        .into_iter()
-        .filter(|p| p.2 == PairKind::Intersect)
-        .map(|(i, j, _)| (i, j))
-        .collect()
+    classify(
+        geoms,
+        eps,
+        Want::Intersecting,
+        None,
+        geom::intersect::COPLANAR_EPSILONS,
+    )
+    .into_iter()
+    .filter(|p| p.2 == PairKind::Intersect)
+    .map(|(i, j, _)| (i, j))
+    .collect()
 }
 
+/// The pairs `want`s, coplanar meaning within `epsilons` × `eps`.
 fn classify(
-    geoms: &[Option<FaceGeom>],
-    eps: f64,
-    want: Want,
-    among: Option<&[bool]>,
-) -> Vec<(usize, usize, PairKind)> {
-    classify_within(geoms, eps, want, among, geom::intersect::COPLANAR_EPSILONS)
-}
-
-/// [`classify`] with coplanar meaning within `epsilons` × `eps`.
-fn classify_within(
     geoms: &[Option<FaceGeom>],
     eps: f64,
     want: Want,

@@ -125,7 +125,7 @@ pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
             .collect()
     };
     let pairs: Vec<(usize, usize)> =
-        check::coplanar_pairs_within(&geoms, eps, None, geom::intersect::CLEAN_COPLANAR_EPSILONS)
+        check::coplanar_pairs(&geoms, eps, geom::intersect::CLEAN_COPLANAR_EPSILONS)
             .into_iter()
             .filter(|p| p.2 == PairKind::Coincident)
             .map(|(i, j, _)| (i, j))

@@ -373,7 +373,7 @@ fn copl_once(
             .map(|f| a.get(f.idx()).copied().unwrap_or(true))
             .collect()
     });
-    let pairs: Vec<(usize, usize)> = check::coplanar_pairs_within(
+    let pairs: Vec<(usize, usize)> = check::coplanar_pairs_with(
         &geoms,
         eps,
         among.as_deref(),

@@ -6,19 +6,27 @@ use glam::{DVec2, DVec3};
 /// rule of the vertex order and its length is twice the polygon's area
 /// (for a planar polygon). Robust for non-convex and slightly non-planar contours.
 pub fn newell_normal(pts: &[DVec3]) -> DVec3 {
+    newell_and_reach(pts).0
+}
+
+/// [`newell_normal`], and in the same pass the squared distance of the
+/// point farthest from the first.
+fn newell_and_reach(pts: &[DVec3]) -> (DVec3, f64) {
     let n = pts.len();
     if n < 3 {
-        return DVec3::ZERO;
+        return (DVec3::ZERO, 0.0);
     }
     // Relative to the first point for accuracy far from the origin.
     let o = pts[0];
     let mut acc = DVec3::ZERO;
+    let mut r2 = 0.0f64;
     for i in 0..n {
         let a = pts[i] - o;
         let b = pts[(i + 1) % n] - o;
         acc += a.cross(b);
+        r2 = r2.max(a.length_squared());
     }
-    acc
+    (acc, r2)
 }
 
 /// A normal of the plane that a contour's points span, from three of its
@@ -53,17 +61,10 @@ pub fn spread_normal(pts: &[DVec3]) -> DVec3 {
 /// turned to agree with whatever the Newell normal has. The same as
 /// `newell_normal` for every contour whose winding encloses area.
 pub fn contour_normal(pts: &[DVec3]) -> DVec3 {
-    let n = newell_normal(pts);
-    let len = n.length();
     // The spread normal is at most r² long (r: the farthest point from the
     // first), so a Newell normal above 1e-9 r² needs no more.
-    let Some(&a) = pts.first() else {
-        return n;
-    };
-    let r2 = pts
-        .iter()
-        .map(|&p| (p - a).length_squared())
-        .fold(0.0, f64::max);
+    let (n, r2) = newell_and_reach(pts);
+    let len = n.length();
     if len.is_finite() && len > 1e-9 * r2 {
         return n;
     }
