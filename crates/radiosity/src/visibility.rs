@@ -86,17 +86,11 @@ pub trait Visibility: Sync {
 ///
 /// The BVH is compact (about 44 bytes a triangle and the corner positions,
 /// instead of 108 bytes a triangle for `geom::bvh`): triangles are three
-/// indices into a shared corner array and a surface id. Node boxes and the
-/// box test are `geom::bvh`'s, and the triangle test is
-/// `geom::bvh::ray_triangle` in f64 on the same corners in the same order;
-/// "is anything hit" does not depend on the order in which triangles are
-/// tried, so the answers are `geom::bvh`'s.
-///
-/// (Node boxes stay f64: boxes rounded outward to f32 changed answers,
-/// because the box test — `geom::bvh`'s too — rejects a ray that lies
-/// exactly in the plane of a box's lower face with a zero direction
-/// component there (`0 · ∞` is NaN, and `min(NaN, ∞)` is ∞), and a box
-/// rounded outward no longer has its face in that plane.)
+/// indices into a shared corner array and a surface id. Nodes (f32 boxes
+/// rounded outward, 32 bytes) and the box test are `geom::bvh`'s, and the
+/// triangle test is `geom::bvh::ray_triangle` in f64 on the same corners in
+/// the same order; "is anything hit" does not depend on the order in which
+/// triangles are tried, so the answers are `geom::bvh`'s.
 pub struct RayVisibility {
     /// Patch corner positions (indexed by corner vertex id).
     pts: Vec<DVec3>,
@@ -193,7 +187,7 @@ impl RayVisibility {
         let inv = DVec3::ONE / dir;
         let frame = RayFrame::new(dir)?;
         let root = &self.nodes[0];
-        let t0 = slab_entry(root.lo, root.hi, origin, inv, tmin, tmax)?;
+        let t0 = slab_entry(root.lo(), root.hi(), origin, inv, tmin, tmax)?;
         // Nearer child first: a ray toward a vertex in another room is
         // usually stopped by a wall near its start, so the boxes near the
         // origin are the likely place of a hit. Whether anything is hit
