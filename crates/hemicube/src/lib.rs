@@ -1194,9 +1194,11 @@ impl Visibility for Hemicube {
         &self,
         mesh: &Mesh,
         shooter: SurfaceId,
+        piece: &[DVec3],
         pairs: &[(DVec3, VertId)],
+        cache: &mut radiosity::PairCache,
     ) -> Vec<bool> {
-        self.ray.visible_pairs(mesh, shooter, pairs)
+        self.ray.visible_pairs(mesh, shooter, piece, pairs, cache)
     }
 
     fn name(&self) -> &'static str {

@@ -15,4 +15,4 @@ mod tail;
 pub mod visibility;
 
 pub use solver::{Options, Output, ShotStats, Solver, Stop, TailStats};
-pub use visibility::{RayVisibility, Visibility};
+pub use visibility::{PairCache, RayVisibility, Visibility};

@@ -14,7 +14,7 @@ use crate::cube::OcclusionCube;
 use crate::formfactor::{
     Cell, offset_receiver, point_to_polygon, receives, shaped_form_factor, shaped_form_factor_pair,
 };
-use crate::visibility::Visibility;
+use crate::visibility::{PairCache, Visibility};
 
 type Rgb = [f64; 3];
 
@@ -2375,6 +2375,7 @@ impl<'v> Solver<'v> {
         state.resize(nv * g * g, 0);
         // The centre, tried with the first corners.
         let mut centre_seen = vec![false; nv];
+        let mut cache = PairCache::default();
         let mut active: Vec<Vec<(usize, usize)>> = vec![vec![(0, 0)]; nv];
         // Settled cells (receiver, cells a side, i, j, share seen).
         let mut lit: Vec<(usize, usize, usize, usize, f64)> = Vec::new();
@@ -2401,7 +2402,9 @@ impl<'v> Solver<'v> {
             if d == 0 {
                 pairs.extend(verts.iter().map(|&v| (c, v)));
             }
-            let seen = self.vis.visible_pairs(mesh, surface, &pairs);
+            let seen = self
+                .vis
+                .visible_pairs(mesh, surface, poly, &pairs, &mut cache);
             for (&slot, &sn) in slots.iter().zip(&seen) {
                 state[slot] = if sn { 1 } else { 2 };
             }

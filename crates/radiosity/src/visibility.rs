@@ -37,14 +37,21 @@ pub trait Visibility: Sync {
 
     /// For each (point on surface `shooter`, vertex) pair, whether the
     /// segment between them is unobstructed: many sample points of one
-    /// shooter at once (a penumbra's cells). The default asks
+    /// shooter piece at once (a penumbra's cells). Every point lies in the
+    /// convex hull of `piece` (the piece's corners), which an
+    /// implementation may use to cull, keeping what it finds per receiver
+    /// in `cache` (one cache per piece: the caller asks again with more
+    /// points of the same piece). The default asks
     /// [`Visibility::visible_few`] pair by pair.
     fn visible_pairs(
         &self,
         mesh: &Mesh,
         shooter: SurfaceId,
+        piece: &[DVec3],
         pairs: &[(DVec3, VertId)],
+        cache: &mut PairCache,
     ) -> Vec<bool> {
+        let _ = (piece, cache);
         pairs
             .iter()
             .map(|&(from, v)| self.visible_few(mesh, from, shooter, &[v])[0])
@@ -96,6 +103,9 @@ pub struct RayVisibility {
     pts: Vec<DVec3>,
     tris: Vec<Tri>,
     nodes: Vec<Node>,
+    /// The shafts' slack: far above the rounding of a plane test anywhere
+    /// in the model (1e-9 of its largest coordinate and its size).
+    tol: f64,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -131,7 +141,22 @@ impl RayVisibility {
             }
         }
         let nodes = build_nodes(&mut tris, |t| t.v.map(|v| pts[v as usize]));
-        RayVisibility { pts, tris, nodes }
+        let (lo, hi) = pts
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
+                (lo.min(p), hi.max(p))
+            });
+        let tol = if pts.is_empty() {
+            0.0
+        } else {
+            1e-9 * (lo.abs().max(hi.abs()).max_element() + (hi - lo).length())
+        };
+        RayVisibility {
+            pts,
+            tris,
+            nodes,
+            tol,
+        }
     }
 
     /// Whether the segment from → to is clear of every surface but the two named.
@@ -147,6 +172,76 @@ impl RayVisibility {
         self.pts.capacity() * size_of::<DVec3>()
             + self.tris.capacity() * size_of::<Tri>()
             + self.nodes.capacity() * size_of::<Node>()
+    }
+
+    /// The triangles (indices into `tris`) of surfaces other than `a` and
+    /// `b` that may meet the convex hull of `piece` and `to`; `None` when
+    /// there are so many that rays through the BVH are cheaper.
+    fn in_shaft(
+        &self,
+        piece: &[DVec3],
+        to: DVec3,
+        a: SurfaceId,
+        b: SurfaceId,
+    ) -> Option<Vec<ShaftTri>> {
+        if self.nodes.is_empty() {
+            return Some(Vec::new());
+        }
+        let shaft = Shaft::new(piece, to, self.tol);
+        let mut list = Vec::new();
+        let mut stack = vec![0u32];
+        while let Some(ni) = stack.pop() {
+            let n = &self.nodes[ni as usize];
+            if shaft.misses_box(n.lo(), n.hi()) {
+                continue;
+            }
+            if n.count == 0 {
+                stack.push(n.first);
+                stack.push(n.first + 1);
+                continue;
+            }
+            for k in n.first..n.first + n.count {
+                let t = &self.tris[k as usize];
+                if t.surface == a.0 || t.surface == b.0 {
+                    continue;
+                }
+                let p = t.v.map(|v| self.pts[v as usize]);
+                if !shaft.misses_triangle(&p) {
+                    let n = (p[1] - p[0]).cross(p[2] - p[0]);
+                    let d = n.dot(p[0]);
+                    // The corners' own distance from the plane (rounding),
+                    // and rounding of a test point's.
+                    let off = p.iter().map(|&y| (n.dot(y) - d).abs()).fold(0.0, f64::max);
+                    list.push(ShaftTri {
+                        k,
+                        n,
+                        d,
+                        slack: off + self.tol * n.length(),
+                    });
+                    if list.len() > SHAFT_MAX {
+                        return None;
+                    }
+                }
+            }
+        }
+        Some(list)
+    }
+
+    /// Whether the segment from → to (within a shaft whose triangles are
+    /// `list`) is clear: [`RayVisibility::clear`]'s test on those alone.
+    fn clear_among(&self, list: &[ShaftTri], from: DVec3, to: DVec3) -> bool {
+        let Some(frame) = RayFrame::new(to - from) else {
+            return true;
+        };
+        !list.iter().any(|t| {
+            let (a, b) = (t.n.dot(from) - t.d, t.n.dot(to) - t.d);
+            // Both ends beyond the plane on one side: no crossing.
+            if (a > t.slack && b > t.slack) || (a < -t.slack && b < -t.slack) {
+                return false;
+            }
+            ray_triangle_with(from, &frame, &self.triangle(&self.tris[t.k as usize]))
+                .is_some_and(|t| t > 1e-7 && t < 1.0 - 1e-7)
+        })
     }
 
     fn triangle(&self, t: &Tri) -> Triangle {
@@ -242,18 +337,75 @@ impl Visibility for RayVisibility {
             .collect()
     }
 
+    /// Pairs are answered per receiver: the first time a receiver comes
+    /// with at least [`SHAFT_PAIRS`] sample points of the piece, the
+    /// triangles that may meet the convex hull of the piece and its
+    /// receiving point (a shaft, Haines and Wallace 1994) are collected and
+    /// kept in `cache`; each of its segments is then tried against those
+    /// alone, with the same triangle test (after a test of the segment's
+    /// ends against the triangle's plane, with slack). A segment lies in
+    /// the hull, so the triangles it crosses are all in the list, and the
+    /// answers are those of a ray through the BVH.
     fn visible_pairs(
         &self,
         mesh: &Mesh,
         shooter: SurfaceId,
+        piece: &[DVec3],
         pairs: &[(DVec3, VertId)],
+        cache: &mut PairCache,
     ) -> Vec<bool> {
-        pairs
+        if piece.len() < 3 {
+            return pairs
+                .par_iter()
+                .map(|&(from, v)| {
+                    self.clear(from, mesh.receiver_pos(v), shooter, mesh.vertex_surface(v))
+                })
+                .collect();
+        }
+        // The pairs by receiver.
+        let mut order: Vec<u32> = (0..pairs.len() as u32).collect();
+        order.sort_unstable_by_key(|&i| (pairs[i as usize].1, i));
+        let groups: Vec<&[u32]> = order
+            .chunk_by(|&a, &b| pairs[a as usize].1 == pairs[b as usize].1)
+            .collect();
+        // New shafts for the receivers with enough points.
+        let fresh: Vec<VertId> = groups
+            .iter()
+            .map(|g| pairs[g[0] as usize].1)
+            .zip(&groups)
+            .filter(|(v, g)| g.len() >= SHAFT_PAIRS && !cache.lists.contains_key(v))
+            .map(|(v, _)| v)
+            .collect();
+        let made: Vec<Option<Vec<ShaftTri>>> = fresh
             .par_iter()
-            .map(|&(from, v)| {
-                self.clear(from, mesh.receiver_pos(v), shooter, mesh.vertex_surface(v))
+            .map(|&v| self.in_shaft(piece, mesh.receiver_pos(v), shooter, mesh.vertex_surface(v)))
+            .collect();
+        cache.lists.extend(fresh.into_iter().zip(made));
+        let cache = &*cache;
+        let answers: Vec<Vec<bool>> = groups
+            .par_iter()
+            .map(|g| {
+                let v = pairs[g[0] as usize].1;
+                let (to, surface) = (mesh.receiver_pos(v), mesh.vertex_surface(v));
+                let list = cache.lists.get(&v).and_then(|l| l.as_deref());
+                g.iter()
+                    .map(|&i| {
+                        let from = pairs[i as usize].0;
+                        match list {
+                            Some(list) => self.clear_among(list, from, to),
+                            None => self.clear(from, to, shooter, surface),
+                        }
+                    })
+                    .collect()
             })
-            .collect()
+            .collect();
+        let mut out = vec![false; pairs.len()];
+        for (g, a) in groups.iter().zip(answers) {
+            for (&i, x) in g.iter().zip(a) {
+                out[i as usize] = x;
+            }
+        }
+        out
     }
 
     fn name(&self) -> &'static str {
@@ -275,6 +427,102 @@ impl Visibility for RayVisibility {
             id != a.0 && id != b.0
         })
         .map(|t| (self.triangle(t).p, SurfaceId(t.surface)))
+    }
+}
+
+/// What [`Visibility::visible_pairs`] keeps for one piece between calls:
+/// per receiver, the triangles of its shaft (`None`: too many, rays).
+#[derive(Default)]
+pub struct PairCache {
+    lists: std::collections::HashMap<VertId, Option<Vec<ShaftTri>>>,
+}
+
+/// A triangle in a shaft, with its plane.
+struct ShaftTri {
+    /// Index into `tris`.
+    k: u32,
+    n: DVec3,
+    d: f64,
+    /// A point farther than this from the plane (`|n·y − d|`) is off it.
+    slack: f64,
+}
+
+/// A receiver with at least this many sample points of one piece gets a
+/// shaft ([`RayVisibility::visible_pairs`]).
+const SHAFT_PAIRS: usize = 4;
+/// A shaft with more triangles than this is given up for rays.
+const SHAFT_MAX: usize = 256;
+
+/// The convex hull of a piece (a convex polygon, its corners coplanar
+/// within rounding) and a point, as the half-spaces of the piece's plane
+/// and of the planes through the point and each of its edges, each with a
+/// slack that covers every corner of the hull (measured, so any hull
+/// satisfies them whatever the planes' conditioning) and rounding; and its
+/// box. What lies wholly outside one half-space or the box misses the hull.
+struct Shaft {
+    lo: DVec3,
+    hi: DVec3,
+    /// (normal, offset, slack): outside where `n·y − d > slack`.
+    planes: Vec<(DVec3, f64, f64)>,
+}
+
+impl Shaft {
+    fn new(piece: &[DVec3], x: DVec3, tol: f64) -> Shaft {
+        let n = piece.len();
+        let c = piece.iter().copied().sum::<DVec3>() / n as f64;
+        let hull = || piece.iter().copied().chain(std::iter::once(x));
+        let (mut lo, mut hi) = (x, x);
+        for p in piece {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        let mut planes = Vec::with_capacity(n + 1);
+        let mut add = |nrm: DVec3, at: DVec3, inside: DVec3| {
+            let nrm = if nrm.dot(inside - at) > 0.0 {
+                -nrm
+            } else {
+                nrm
+            };
+            let d = nrm.dot(at);
+            let excess = hull().map(|p| nrm.dot(p) - d).fold(0.0, f64::max);
+            planes.push((nrm, d, excess + tol * nrm.length()));
+        };
+        // The piece's plane (its Newell normal), the point inside.
+        let mut nb = DVec3::ZERO;
+        for i in 0..n {
+            nb += piece[i].cross(piece[(i + 1) % n]);
+        }
+        add(nb, c, x);
+        for i in 0..n {
+            let (a, b) = (piece[i], piece[(i + 1) % n]);
+            add((b - a).cross(x - a), a, c);
+        }
+        Shaft {
+            lo: lo - DVec3::splat(tol),
+            hi: hi + DVec3::splat(tol),
+            planes,
+        }
+    }
+
+    fn misses_box(&self, lo: DVec3, hi: DVec3) -> bool {
+        if lo.cmpgt(self.hi).any() || hi.cmplt(self.lo).any() {
+            return true;
+        }
+        self.planes.iter().any(|&(n, d, slack)| {
+            // The box's corner least far along n.
+            let y = DVec3::select(n.cmpgt(DVec3::ZERO), lo, hi);
+            n.dot(y) - d > slack
+        })
+    }
+
+    fn misses_triangle(&self, p: &[DVec3; 3]) -> bool {
+        let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
+        if lo.cmpgt(self.hi).any() || hi.cmplt(self.lo).any() {
+            return true;
+        }
+        self.planes
+            .iter()
+            .any(|&(n, d, slack)| p.iter().all(|&y| n.dot(y) - d > slack))
     }
 }
 
@@ -325,5 +573,147 @@ mod tests {
             }
         }
         assert!(n > 0 && n < 11 * 11 * 4);
+    }
+
+    /// Shafts answer as rays do: a lamp piece over a floor of 12 × 12
+    /// patches with blockers of every kind between (a slab, a thin post, a
+    /// tilted plate that pierces the shaft's side, a wall edge-on), at the
+    /// origin and far from it; each receiver asked in two calls, so the
+    /// second uses the cached shaft.
+    #[test]
+    fn shafts_answer_as_rays() {
+        for shift in [DVec3::ZERO, DVec3::new(312345.678, 4123456.789, 87.0)] {
+            let mut src = String::from("c_rgb g 0.5 0.5 0.5;\n");
+            let mut k = 0;
+            let mut quad = |src: &mut String, p: [DVec3; 4]| {
+                let names: Vec<String> = p
+                    .iter()
+                    .map(|q| {
+                        let q = *q + shift;
+                        k += 1;
+                        src.push_str(&format!("v p{k} {} {} {};\n", q.x, q.y, q.z));
+                        format!("p{k}")
+                    })
+                    .collect();
+                src.push_str(&format!("f ({}) g;\n", names.join(" ")));
+            };
+            let n = 12;
+            for i in 0..n {
+                for j in 0..n {
+                    let (x0, y0) = (i as f64 / n as f64 * 3.0, j as f64 / n as f64 * 3.0);
+                    let (x1, y1) = (x0 + 0.25, y0 + 0.25);
+                    quad(
+                        &mut src,
+                        [
+                            DVec3::new(x0, y0, 0.0),
+                            DVec3::new(x1, y0, 0.0),
+                            DVec3::new(x1, y1, 0.0),
+                            DVec3::new(x0, y1, 0.0),
+                        ],
+                    );
+                }
+            }
+            let v = DVec3::new;
+            // The lamp, facing down.
+            let lamp = [
+                v(1.2, 1.2, 2.5),
+                v(1.2, 1.8, 2.5),
+                v(1.8, 1.8, 2.5),
+                v(1.8, 1.2, 2.5),
+            ];
+            quad(&mut src, lamp);
+            // A slab, a post, a tilted plate, a wall edge-on to the lamp's edge.
+            quad(
+                &mut src,
+                [
+                    v(0.5, 0.5, 1.0),
+                    v(1.5, 0.5, 1.0),
+                    v(1.5, 1.5, 1.0),
+                    v(0.5, 1.5, 1.0),
+                ],
+            );
+            quad(
+                &mut src,
+                [
+                    v(2.0, 2.0, 0.5),
+                    v(2.05, 2.0, 0.5),
+                    v(2.05, 2.0, 2.0),
+                    v(2.0, 2.0, 2.0),
+                ],
+            );
+            quad(
+                &mut src,
+                [
+                    v(1.9, 0.3, 0.4),
+                    v(2.8, 0.3, 1.3),
+                    v(2.8, 1.1, 1.3),
+                    v(1.9, 1.1, 0.4),
+                ],
+            );
+            quad(
+                &mut src,
+                [
+                    v(1.8, 1.2, 0.2),
+                    v(1.8, 2.9, 0.2),
+                    v(1.8, 2.9, 2.0),
+                    v(1.8, 1.2, 2.0),
+                ],
+            );
+            let model = ug::parse(src.as_bytes(), "t").unwrap().model;
+            let mesh = Mesh::from_model(&model, 1e-9).unwrap();
+            let vis = RayVisibility::new(&mesh);
+            let shooter = (0..mesh.num_surfaces() as u32)
+                .map(SurfaceId)
+                .find(|&s| {
+                    mesh.patches().any(|p| {
+                        mesh.patch_surface(p) == s
+                            && mesh
+                                .patch_corners(p)
+                                .iter()
+                                .all(|&c| (mesh.vertex_pos(c).z - shift.z - 2.5).abs() < 1e-9)
+                    })
+                })
+                .expect("the lamp");
+            let piece: Vec<DVec3> = lamp.iter().map(|&p| p + shift).collect();
+            let mut pairs = Vec::new();
+            for vtx in (0..mesh.num_vertices() as u32).map(VertId) {
+                if mesh.vertex_surface(vtx) == shooter {
+                    continue;
+                }
+                for a in 0..=4 {
+                    for b in 0..=4 {
+                        let (u, w) = (a as f64 / 4.0, b as f64 / 4.0);
+                        let p = piece[0] * ((1.0 - u) * (1.0 - w))
+                            + piece[1] * (u * (1.0 - w))
+                            + piece[2] * (u * w)
+                            + piece[3] * ((1.0 - u) * w);
+                        pairs.push((p, vtx));
+                    }
+                }
+            }
+            let want: Vec<bool> = pairs
+                .iter()
+                .map(|&(from, x)| {
+                    vis.clear(from, mesh.receiver_pos(x), shooter, mesh.vertex_surface(x))
+                })
+                .collect();
+            let mut cache = PairCache::default();
+            let half = pairs.len() / 2;
+            let mut got = vis.visible_pairs(&mesh, shooter, &piece, &pairs[..half], &mut cache);
+            got.extend(vis.visible_pairs(&mesh, shooter, &piece, &pairs[half..], &mut cache));
+            assert_eq!(got, want, "shift {shift}");
+            let seen = want.iter().filter(|&&x| x).count();
+            assert!(
+                seen > pairs.len() / 4 && seen < pairs.len() * 9 / 10,
+                "{seen} of {}",
+                pairs.len()
+            );
+            assert!(
+                cache
+                    .lists
+                    .values()
+                    .any(|l| l.as_ref().is_some_and(|l| !l.is_empty()))
+            );
+        }
     }
 }
