@@ -945,3 +945,222 @@ mod slab_tests {
         );
     }
 }
+
+/// The slack of shaft tests over points `pts` (a model's): 1e-9 of their
+/// largest coordinate and of their extent, far above the rounding of a
+/// plane test anywhere among them, and far below any feature a model
+/// resolves.
+pub fn shaft_slack(pts: &[DVec3]) -> f64 {
+    if pts.is_empty() {
+        return 0.0;
+    }
+    let (lo, hi) = pts
+        .iter()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
+    1e-9 * (lo.abs().max(hi.abs()).max_element() + (hi - lo).length())
+}
+
+/// A shaft (Haines and Wallace 1994): the convex hull of a convex polygon
+/// (a shooter piece, or a rectangle around points on one plane) and a
+/// point, as the half-spaces of the polygon's plane and of the planes
+/// through the point and each of the polygon's edges, each with a slack
+/// that covers every corner of the hull and every point of `inside`
+/// (measured, so the hull satisfies them whatever the planes'
+/// conditioning, even when the polygon is not quite planar or the point
+/// lies in its plane) and rounding; and its box. What lies wholly outside
+/// one half-space or the box misses the hull, and so misses every segment
+/// between two of its points.
+pub struct Shaft {
+    lo: DVec3,
+    hi: DVec3,
+    /// (normal, offset, slack): outside where `n·y − d > slack`.
+    planes: Vec<(DVec3, f64, f64)>,
+}
+
+impl Shaft {
+    /// The hull of `polygon` and `apex`, with the points `inside` (which
+    /// should lie in it, within rounding) covered too; `tol`: see
+    /// [`shaft_slack`].
+    pub fn new(polygon: &[DVec3], apex: DVec3, inside: &[DVec3], tol: f64) -> Shaft {
+        let n = polygon.len();
+        let hull = || {
+            polygon
+                .iter()
+                .chain(inside)
+                .copied()
+                .chain(std::iter::once(apex))
+        };
+        let (mut lo, mut hi) = (apex, apex);
+        for p in hull() {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        let mut planes = Vec::with_capacity(n + 1);
+        if n >= 3 {
+            let c = polygon.iter().copied().sum::<DVec3>() / n as f64;
+            let mut add = |nrm: DVec3, at: DVec3, towards: DVec3| {
+                let nrm = if nrm.dot(towards - at) > 0.0 {
+                    -nrm
+                } else {
+                    nrm
+                };
+                let d = nrm.dot(at);
+                let excess = hull().map(|p| nrm.dot(p) - d).fold(0.0, f64::max);
+                planes.push((nrm, d, excess + tol * nrm.length()));
+            };
+            // The polygon's plane (its Newell normal), the apex inside.
+            let mut nb = DVec3::ZERO;
+            for i in 0..n {
+                nb += polygon[i].cross(polygon[(i + 1) % n]);
+            }
+            add(nb, c, apex);
+            for i in 0..n {
+                let (a, b) = (polygon[i], polygon[(i + 1) % n]);
+                add((b - a).cross(apex - a), a, c);
+            }
+        }
+        Shaft {
+            lo: lo - DVec3::splat(tol),
+            hi: hi + DVec3::splat(tol),
+            planes,
+        }
+    }
+
+    /// Whether the box [lo, hi] lies wholly outside the shaft.
+    pub fn misses_box(&self, lo: DVec3, hi: DVec3) -> bool {
+        if lo.cmpgt(self.hi).any() || hi.cmplt(self.lo).any() {
+            return true;
+        }
+        self.planes.iter().any(|&(n, d, slack)| {
+            // The box's corner least far along n.
+            let y = DVec3::select(n.cmpgt(DVec3::ZERO), lo, hi);
+            n.dot(y) - d > slack
+        })
+    }
+
+    /// Whether the triangle lies wholly outside the shaft.
+    pub fn misses_triangle(&self, p: &[DVec3; 3]) -> bool {
+        let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
+        if lo.cmpgt(self.hi).any() || hi.cmplt(self.lo).any() {
+            return true;
+        }
+        self.planes
+            .iter()
+            .any(|&(n, d, slack)| p.iter().all(|&y| n.dot(y) - d > slack))
+    }
+}
+
+/// A triangle found in a shaft: its index among the BVH's items, and its
+/// plane, for a quick test of a segment's ends.
+#[derive(Clone, Copy, Debug)]
+pub struct ShaftTri {
+    pub k: u32,
+    n: DVec3,
+    d: f64,
+    /// A point farther than this from the plane (`|n·y − d|`) is off it.
+    slack: f64,
+}
+
+impl ShaftTri {
+    fn new(k: u32, p: &[DVec3; 3], tol: f64) -> ShaftTri {
+        let n = (p[1] - p[0]).cross(p[2] - p[0]);
+        let d = n.dot(p[0]);
+        // The corners' own distance from the plane (rounding), and
+        // rounding of a test point's.
+        let off = p.iter().map(|&y| (n.dot(y) - d).abs()).fold(0.0, f64::max);
+        ShaftTri {
+            k,
+            n,
+            d,
+            slack: off + tol * n.length(),
+        }
+    }
+
+    /// False when the segment a–b certainly does not cross the triangle's
+    /// plane (both ends beyond it on one side, by more than the slack).
+    #[inline]
+    pub fn may_cross(&self, a: DVec3, b: DVec3) -> bool {
+        let (x, y) = (self.n.dot(a) - self.d, self.n.dot(b) - self.d);
+        !((x > self.slack && y > self.slack) || (x < -self.slack && y < -self.slack))
+    }
+}
+
+/// The items of a BVH (`nodes`, built by [`build_nodes`]) whose triangle
+/// may meet the shaft: `tri(k)` gives item `k`'s corners, or `None` to
+/// leave it out. `None` when more than `max` are found (rays are then the
+/// cheaper way).
+pub fn shaft_triangles(
+    nodes: &[Node],
+    shaft: &Shaft,
+    max: usize,
+    tol: f64,
+    tri: impl Fn(u32) -> Option<[DVec3; 3]>,
+) -> Option<Vec<ShaftTri>> {
+    let mut list = Vec::new();
+    if nodes.is_empty() {
+        return Some(list);
+    }
+    let mut stack = vec![0u32];
+    while let Some(ni) = stack.pop() {
+        let n = &nodes[ni as usize];
+        if shaft.misses_box(n.lo(), n.hi()) {
+            continue;
+        }
+        if n.count == 0 {
+            stack.push(n.first);
+            stack.push(n.first + 1);
+            continue;
+        }
+        for k in n.first..n.first + n.count {
+            let Some(p) = tri(k) else {
+                continue;
+            };
+            if !shaft.misses_triangle(&p) {
+                list.push(ShaftTri::new(k, &p, tol));
+                if list.len() > max {
+                    return None;
+                }
+            }
+        }
+    }
+    Some(list)
+}
+
+impl Bvh {
+    /// [`shaft_triangles`] over this BVH's triangles whose id passes `keep`.
+    pub fn shaft_triangles(
+        &self,
+        shaft: &Shaft,
+        max: usize,
+        tol: f64,
+        keep: impl Fn(u32) -> bool,
+    ) -> Option<Vec<ShaftTri>> {
+        shaft_triangles(&self.nodes, shaft, max, tol, |k| {
+            let t = &self.tris[k as usize];
+            keep(t.id).then_some(t.p)
+        })
+    }
+
+    /// Whether the segment `from + t (to − from)`, `tmin < t < tmax`, within
+    /// a shaft whose triangles (those passing the caller's filter) are
+    /// `list`, meets none of them: [`Bvh::occluded`]'s answer.
+    pub fn clear_among(
+        &self,
+        list: &[ShaftTri],
+        from: DVec3,
+        to: DVec3,
+        tmin: f64,
+        tmax: f64,
+    ) -> bool {
+        let Some(frame) = RayFrame::new(to - from) else {
+            return true;
+        };
+        !list.iter().any(|s| {
+            s.may_cross(from, to)
+                && ray_triangle_with(from, &frame, &self.tris[s.k as usize])
+                    .is_some_and(|t| t > tmin && t < tmax)
+        })
+    }
+}

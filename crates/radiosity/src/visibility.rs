@@ -2,7 +2,8 @@
 //! ray-cast implementation (the reference, and the fallback without a GPU).
 
 use geom::bvh::{
-    Node, RayFrame, Triangle, build_nodes, push_children, ray_triangle_with, slab_entry,
+    Node, RayFrame, Shaft, ShaftTri, Triangle, build_nodes, push_children, ray_triangle_with,
+    shaft_triangles, slab_entry,
 };
 use glam::DVec3;
 use libmesh::{Mesh, SurfaceId, VertId};
@@ -103,8 +104,7 @@ pub struct RayVisibility {
     pts: Vec<DVec3>,
     tris: Vec<Tri>,
     nodes: Vec<Node>,
-    /// The shafts' slack: far above the rounding of a plane test anywhere
-    /// in the model (1e-9 of its largest coordinate and its size).
+    /// The shafts' slack ([`geom::bvh::shaft_slack`]).
     tol: f64,
 }
 
@@ -184,47 +184,11 @@ impl RayVisibility {
         a: SurfaceId,
         b: SurfaceId,
     ) -> Option<Vec<ShaftTri>> {
-        if self.nodes.is_empty() {
-            return Some(Vec::new());
-        }
-        let shaft = Shaft::new(piece, to, self.tol);
-        let mut list = Vec::new();
-        let mut stack = vec![0u32];
-        while let Some(ni) = stack.pop() {
-            let n = &self.nodes[ni as usize];
-            if shaft.misses_box(n.lo(), n.hi()) {
-                continue;
-            }
-            if n.count == 0 {
-                stack.push(n.first);
-                stack.push(n.first + 1);
-                continue;
-            }
-            for k in n.first..n.first + n.count {
-                let t = &self.tris[k as usize];
-                if t.surface == a.0 || t.surface == b.0 {
-                    continue;
-                }
-                let p = t.v.map(|v| self.pts[v as usize]);
-                if !shaft.misses_triangle(&p) {
-                    let n = (p[1] - p[0]).cross(p[2] - p[0]);
-                    let d = n.dot(p[0]);
-                    // The corners' own distance from the plane (rounding),
-                    // and rounding of a test point's.
-                    let off = p.iter().map(|&y| (n.dot(y) - d).abs()).fold(0.0, f64::max);
-                    list.push(ShaftTri {
-                        k,
-                        n,
-                        d,
-                        slack: off + self.tol * n.length(),
-                    });
-                    if list.len() > SHAFT_MAX {
-                        return None;
-                    }
-                }
-            }
-        }
-        Some(list)
+        let shaft = Shaft::new(piece, to, &[], self.tol);
+        shaft_triangles(&self.nodes, &shaft, SHAFT_MAX, self.tol, |k| {
+            let t = &self.tris[k as usize];
+            (t.surface != a.0 && t.surface != b.0).then(|| t.v.map(|v| self.pts[v as usize]))
+        })
     }
 
     /// Whether the segment from → to (within a shaft whose triangles are
@@ -234,13 +198,9 @@ impl RayVisibility {
             return true;
         };
         !list.iter().any(|t| {
-            let (a, b) = (t.n.dot(from) - t.d, t.n.dot(to) - t.d);
-            // Both ends beyond the plane on one side: no crossing.
-            if (a > t.slack && b > t.slack) || (a < -t.slack && b < -t.slack) {
-                return false;
-            }
-            ray_triangle_with(from, &frame, &self.triangle(&self.tris[t.k as usize]))
-                .is_some_and(|t| t > 1e-7 && t < 1.0 - 1e-7)
+            t.may_cross(from, to)
+                && ray_triangle_with(from, &frame, &self.triangle(&self.tris[t.k as usize]))
+                    .is_some_and(|t| t > 1e-7 && t < 1.0 - 1e-7)
         })
     }
 
@@ -437,94 +397,11 @@ pub struct PairCache {
     lists: std::collections::HashMap<VertId, Option<Vec<ShaftTri>>>,
 }
 
-/// A triangle in a shaft, with its plane.
-struct ShaftTri {
-    /// Index into `tris`.
-    k: u32,
-    n: DVec3,
-    d: f64,
-    /// A point farther than this from the plane (`|n·y − d|`) is off it.
-    slack: f64,
-}
-
 /// A receiver with at least this many sample points of one piece gets a
 /// shaft ([`RayVisibility::visible_pairs`]).
 const SHAFT_PAIRS: usize = 4;
 /// A shaft with more triangles than this is given up for rays.
 const SHAFT_MAX: usize = 256;
-
-/// The convex hull of a piece (a convex polygon, its corners coplanar
-/// within rounding) and a point, as the half-spaces of the piece's plane
-/// and of the planes through the point and each of its edges, each with a
-/// slack that covers every corner of the hull (measured, so any hull
-/// satisfies them whatever the planes' conditioning) and rounding; and its
-/// box. What lies wholly outside one half-space or the box misses the hull.
-struct Shaft {
-    lo: DVec3,
-    hi: DVec3,
-    /// (normal, offset, slack): outside where `n·y − d > slack`.
-    planes: Vec<(DVec3, f64, f64)>,
-}
-
-impl Shaft {
-    fn new(piece: &[DVec3], x: DVec3, tol: f64) -> Shaft {
-        let n = piece.len();
-        let c = piece.iter().copied().sum::<DVec3>() / n as f64;
-        let hull = || piece.iter().copied().chain(std::iter::once(x));
-        let (mut lo, mut hi) = (x, x);
-        for p in piece {
-            lo = lo.min(*p);
-            hi = hi.max(*p);
-        }
-        let mut planes = Vec::with_capacity(n + 1);
-        let mut add = |nrm: DVec3, at: DVec3, inside: DVec3| {
-            let nrm = if nrm.dot(inside - at) > 0.0 {
-                -nrm
-            } else {
-                nrm
-            };
-            let d = nrm.dot(at);
-            let excess = hull().map(|p| nrm.dot(p) - d).fold(0.0, f64::max);
-            planes.push((nrm, d, excess + tol * nrm.length()));
-        };
-        // The piece's plane (its Newell normal), the point inside.
-        let mut nb = DVec3::ZERO;
-        for i in 0..n {
-            nb += piece[i].cross(piece[(i + 1) % n]);
-        }
-        add(nb, c, x);
-        for i in 0..n {
-            let (a, b) = (piece[i], piece[(i + 1) % n]);
-            add((b - a).cross(x - a), a, c);
-        }
-        Shaft {
-            lo: lo - DVec3::splat(tol),
-            hi: hi + DVec3::splat(tol),
-            planes,
-        }
-    }
-
-    fn misses_box(&self, lo: DVec3, hi: DVec3) -> bool {
-        if lo.cmpgt(self.hi).any() || hi.cmplt(self.lo).any() {
-            return true;
-        }
-        self.planes.iter().any(|&(n, d, slack)| {
-            // The box's corner least far along n.
-            let y = DVec3::select(n.cmpgt(DVec3::ZERO), lo, hi);
-            n.dot(y) - d > slack
-        })
-    }
-
-    fn misses_triangle(&self, p: &[DVec3; 3]) -> bool {
-        let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
-        if lo.cmpgt(self.hi).any() || hi.cmplt(self.lo).any() {
-            return true;
-        }
-        self.planes
-            .iter()
-            .any(|&(n, d, slack)| p.iter().all(|&y| n.dot(y) - d > slack))
-    }
-}
 
 #[cfg(test)]
 mod tests {
