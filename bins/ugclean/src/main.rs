@@ -43,6 +43,7 @@ fn main() -> std::process::ExitCode {
     let args = Args::parse();
     let c = &args.common;
     cli::filter(c, args.epsilon, |model, eps| {
+        let model = clean::group::settle_warned(model, eps, c.quiet, c.verbose > 0)?;
         let (out, st) = clean::coincident::clean(&model, eps);
         let (out, enc) = if args.keep_enclosed {
             (out, clean::enclosed::Stats::default())

@@ -42,6 +42,7 @@ fn main() -> std::process::ExitCode {
     let args = Args::parse();
     let c = &args.common;
     cli::filter(c, args.epsilon, |model, eps| {
+        let model = clean::group::settle_warned(model, eps, c.quiet, c.verbose > 0)?;
         let contact = args.contact;
         let (out, st) = clean::copl::copl_contact(&model, eps, contact)?;
         c.verbose(format!(

@@ -64,6 +64,7 @@ fn main() -> std::process::ExitCode {
     let args = Args::parse();
     let c = &args.common;
     cli::filter(c, args.epsilon, |model, eps| {
+        let model = clean::group::settle_warned(model, eps, c.quiet, c.verbose > 0)?;
         let opts = clean::orient::Options {
             auto: !args.no_auto,
             bombs: args.bombs.clone(),

@@ -29,6 +29,7 @@ fn main() -> std::process::ExitCode {
     let args = Args::parse();
     let c = &args.common;
     cli::filter(c, args.epsilon, |model, eps| {
+        let model = clean::group::settle_warned(model, eps, c.quiet, c.verbose > 0)?;
         let (out, st) = clean::isect::isect(&model, eps)?;
         if st.tessellated > 0 && !c.quiet {
             eprintln!(

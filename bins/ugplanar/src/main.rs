@@ -46,6 +46,12 @@ fn main() -> std::process::ExitCode {
             "{} faces, {} non-planar, {} triangles written",
             st.faces, st.nonplanar, st.triangles
         ));
-        Ok(out)
+        // Planar now: every face made sound (`clean::group::settle`).
+        Ok(clean::group::settle_warned(
+            out,
+            eps,
+            c.quiet,
+            c.verbose > 0,
+        )?)
     })
 }

@@ -77,23 +77,8 @@ fn main() -> std::process::ExitCode {
         };
         let (out, st) = clean::group::vlmerge(model, &opts)?;
         if !c.quiet {
-            for d in &st.dropped {
-                eprintln!("warning: face {}: {}; dropped", d.face, d.reason);
-            }
-            for f in st
-                .repaired
-                .iter()
-                .take(if c.verbose > 0 { usize::MAX } else { 10 })
-            {
-                eprintln!(
-                    "warning: face {f}: its contours cross or touch themselves, or it is narrower than epsilon somewhere; repaired"
-                );
-            }
-            if c.verbose == 0 && st.repaired.len() > 10 {
-                eprintln!(
-                    "warning: {} more faces repaired (-v lists them)",
-                    st.repaired.len() - 10
-                );
+            for w in clean::group::warnings(&st, c.verbose > 0) {
+                eprintln!("{w}");
             }
         }
         let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;

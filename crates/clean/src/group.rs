@@ -192,6 +192,69 @@ pub fn vlmerge(model: Model, opts: &Options) -> Result<(Model, Stats), ug::Diagn
     Ok((out, st))
 }
 
+/// Makes every face sound before a tool works on the model: [`vlmerge`]
+/// with its repair alone (no welding, no T-vertices, no joining). A
+/// repeated vertex goes, a face with no area (collinear vertices, fewer
+/// than three distinct ones) is dropped, and a contour that crosses or
+/// touches itself (a bow-tie, a spike) is split into its even-odd region;
+/// a model whose faces are all sound comes back as it was. ugplanar,
+/// ugflip, ugisect, ugcopl and ugclean run it first, so that none of them
+/// hands a degenerate face on (each tool of the chain must work in any
+/// order, on raw exports); it costs about 3% of ugisect's time on the
+/// 8.6k messy building.
+pub fn settle(model: Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
+    vlmerge(
+        model,
+        &Options {
+            merge_vertices: false,
+            split_edges: false,
+            merge_faces: false,
+            repair: true,
+            ..Options::new(eps)
+        },
+    )
+}
+
+/// [`settle`] for a command-line tool: its warnings go to stderr unless
+/// `quiet` (every repaired face when `all`, else ten).
+pub fn settle_warned(
+    model: Model,
+    eps: f64,
+    quiet: bool,
+    all: bool,
+) -> Result<Model, ug::Diagnostic> {
+    let (model, st) = settle(model, eps)?;
+    if !quiet {
+        for w in warnings(&st, all) {
+            eprintln!("{w}");
+        }
+    }
+    Ok(model)
+}
+
+/// The warnings for what [`vlmerge`] or [`settle`] dropped and repaired:
+/// a line per face (at most ten repaired ones unless `all`).
+pub fn warnings(st: &Stats, all: bool) -> Vec<String> {
+    let mut out: Vec<String> = st
+        .dropped
+        .iter()
+        .map(|d| format!("warning: face {}: {}; dropped", d.face, d.reason))
+        .collect();
+    let limit = if all { usize::MAX } else { 10 };
+    out.extend(st.repaired.iter().take(limit).map(|f| {
+        format!(
+            "warning: face {f}: its contours cross or touch themselves, or it is narrower than epsilon somewhere; repaired"
+        )
+    }));
+    if st.repaired.len() > limit {
+        out.push(format!(
+            "warning: {} more faces repaired (-v lists them)",
+            st.repaired.len() - limit
+        ));
+    }
+    out
+}
+
 /// Per face id: its name, or `#k` for the k-th top-level face (from 1), as `ugcheck` names it.
 fn face_labels(m: &Model) -> Vec<Option<String>> {
     let mut labels = vec![None; m.faces.len()];
