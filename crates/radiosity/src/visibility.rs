@@ -141,16 +141,7 @@ impl RayVisibility {
             }
         }
         let nodes = build_nodes(&mut tris, |t| t.v.map(|v| pts[v as usize]));
-        let (lo, hi) = pts
-            .iter()
-            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
-                (lo.min(p), hi.max(p))
-            });
-        let tol = if pts.is_empty() {
-            0.0
-        } else {
-            1e-9 * (lo.abs().max(hi.abs()).max_element() + (hi - lo).length())
-        };
+        let tol = geom::bvh::shaft_slack(&pts);
         RayVisibility {
             pts,
             tris,
