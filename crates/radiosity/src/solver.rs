@@ -491,7 +491,7 @@ struct Past {
 #[derive(Clone, Debug, Default)]
 struct Penumbra {
     r: f64,
-    cells: std::collections::HashSet<[i64; 3]>,
+    cells: rustc_hash::FxHashSet<[i64; 3]>,
 }
 
 impl Penumbra {

@@ -385,7 +385,7 @@ impl Visibility for RayVisibility {
 /// per receiver, the triangles of its shaft (`None`: too many, rays).
 #[derive(Default)]
 pub struct PairCache {
-    lists: std::collections::HashMap<VertId, Option<Vec<ShaftTri>>>,
+    lists: rustc_hash::FxHashMap<VertId, Option<Vec<ShaftTri>>>,
 }
 
 /// A receiver with at least this many sample points of one piece gets a
