@@ -318,3 +318,28 @@ fn enclosed_faces_go_and_no_light_reached_them() {
         );
     }
 }
+
+/// A pier's end face inside the facade slab, two of its vertices just
+/// outside the facade's plane (seed 1101 of the dirty-building property,
+/// after the coincident step): the enclosed step removes it, and nothing
+/// is left inconsistently oriented.
+#[test]
+fn a_pier_end_poking_through_the_facade_is_enclosed() {
+    let src = std::fs::read_to_string(fixture("clean/pier-end-in-facade.ug")).unwrap();
+    assert_eq!(check(&src)["inconsistent"].as_array().unwrap().len(), 5);
+    assert!(faces(&src).contains(&"s0w2p0.5.i5".to_string()));
+    let out = run_ok("ugclean", &[], Some(src.as_bytes()));
+    assert!(!faces(&out).contains(&"s0w2p0.5.i5".to_string()));
+    let r = check(&out);
+    for k in [
+        "inconsistent",
+        "degenerate",
+        "intersecting",
+        "overlapping",
+        "coincident",
+        "tvertices",
+        "nonplanar",
+    ] {
+        assert_eq!(r[k].as_array().unwrap().len(), 0, "{k}: {}", r[k]);
+    }
+}
