@@ -9,7 +9,8 @@
 //! 23,200 faces the chain leaves; they only cost patches.
 //!
 //! **The test.** From points just in front of every face (the centroids of
-//! its largest triangles, `10·eps` off its plane) rays go out over the
+//! its largest triangles, slivers under `20·eps` wide left out, `10·eps`
+//! off its plane) rays go out over the
 //! front hemisphere (a fixed Fibonacci set). Each ray meets a face's front,
 //! a face's back, or nothing. Faces joined by front-to-front sight form
 //! components (union–find). A component is **enclosed** — all its faces go —
