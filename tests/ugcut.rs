@@ -329,6 +329,40 @@ fn a_strip_under_sixteen_epsilon_wide_is_cut_across() {
     );
 }
 
+/// A strip 23 epsilon wide (wider than the feet reach) with a 1 mm step
+/// on one side near its top (fixtures/cut/wide-strip-step.ug, from the CAD
+/// building of seed 1839): every triangle from the step to a corner is a
+/// needle, and the point that splits the quadrilateral around one must be
+/// placed by the strip's width, not by the step's length (a T-vertex and a
+/// degenerate patch before).
+#[test]
+fn a_step_on_a_strip_wider_than_the_feet_reach_gets_no_needle() {
+    // (The face is planar to 0.07 epsilon only, which across its 0.21 mm
+    // tilts it by 3 milliradians: its patches measure its area 5e-7
+    // larger, 3e-10 m².)
+    cuts_cleanly(
+        "cut/wide-strip-step.ug",
+        "9.324728e-6",
+        &["0.7", "0.2", "0.05", "2%"],
+        1e-6,
+    );
+}
+
+/// A step of 1.03 epsilon in a straight side (fixtures/cut/jog-in-a-side.ug,
+/// a rug piece from the CAD building of seed 2999): the triangle on the
+/// step took the next vertex up the side, 0.27 m away, as its apex (a
+/// needle: a T-vertex and a degenerate patch); a point straight across
+/// the step is its apex now.
+#[test]
+fn a_step_of_about_epsilon_in_a_side_gets_an_apex_straight_across() {
+    cuts_cleanly(
+        "cut/jog-in-a-side.ug",
+        "9.210637e-6",
+        &["0.7", "0.2", "0.05", "2%"],
+        1e-8,
+    );
+}
+
 /// ugcut of the fixture at each length (with epsilon `eps`): only sound
 /// patches, no intersecting pair, the area of every material kept to `tol`
 /// (relative).

@@ -28,8 +28,12 @@
 //! 3. the rest is a constrained Delaunay triangulation (spade) of the boundary
 //!    points and the corners along the cells' outline, refined (Ruppert-style,
 //!    minimum angle `angle`, area at most 0.6·len²) with boundary segments and
-//!    cell edges kept whole; then pairs of triangles that form a well-shaped
-//!    convex quadrilateral are joined.
+//!    cell edges kept whole; needles (a corner within epsilon of the
+//!    opposite side) are flipped away or split by a point inside, and one
+//!    left on a boundary edge shorter than 2 epsilon (a jog) gets a point
+//!    straight across that edge, and the triangulation is read again; then
+//!    pairs of triangles that form a well-shaped convex quadrilateral are
+//!    joined.
 //!
 //! Patches keep the face's material and orientation and are named `NAME.1`,
 //! `NAME.2`, … (unnamed faces give unnamed patches). New vertices are named
@@ -906,80 +910,102 @@ fn mesh_face(
     if full {
         cdt.refine(params);
     }
-    let added: Vec<Point2<f64>> = cdt.vertices().skip(before).map(|v| v.position()).collect();
-    for p in added {
-        let v = cx.new_vertex(
-            format!("{fname}.v{next_inner}"),
-            frame.to_3d(DVec2::new(p.x, p.y)),
-        );
-        next_inner += 1;
-        ids.push(v);
-    }
     let in_cell = |p: DVec2| {
         let i = ((p.x - lo.x) / du).floor();
         let j = ((p.y - lo.y) / dv).floor();
         is_acc(i as isize, j as isize)
     };
-    // Inside or outside, decided topologically: a flood fill over the
-    // triangles from the convex hull, switching sides at every boundary
-    // segment (cell outlines do not count). Point location would be fooled
-    // by boundary points that are collinear only up to rounding.
     let key = |a: usize, b: usize| (a.min(b), a.max(b));
-    let boundary: FxHashSet<(usize, usize)> = bcontours
-        .iter()
-        .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
-        .map(|(a, b)| key(handle[&a].index(), handle[&b].index()))
-        .collect();
-    let mut inside: Vec<Option<bool>> = vec![None; cdt.num_all_faces()];
-    let mut queue = std::collections::VecDeque::new();
-    for tri in cdt.inner_faces() {
-        for e in tri.adjacent_edges() {
-            if e.rev().face().is_outer() && inside[tri.fix().index()].is_none() {
-                let crossing =
-                    boundary.contains(&key(e.from().fix().index(), e.to().fix().index()));
-                inside[tri.fix().index()] = Some(crossing);
-                queue.push_back(tri.fix());
-            }
-        }
-    }
-    while let Some(fh) = queue.pop_front() {
-        let tri = cdt.face(fh);
-        let here = inside[fh.index()].unwrap_or(false);
-        for e in tri.adjacent_edges() {
-            let Some(g) = e.rev().face().as_inner() else {
-                continue;
-            };
-            if inside[g.fix().index()].is_some() {
-                continue;
-            }
-            let crossing = boundary.contains(&key(e.from().fix().index(), e.to().fix().index()));
-            inside[g.fix().index()] = Some(here ^ crossing);
-            queue.push_back(g.fix());
-        }
-    }
-    let mut tris: Vec<[VertexId; 3]> = Vec::new();
-    for tri in cdt.inner_faces() {
-        if inside[tri.fix().index()] != Some(true) {
-            continue;
-        }
-        let vs = tri.vertices();
-        let p = vs.map(|v| DVec2::new(v.position().x, v.position().y));
-        if in_cell((p[0] + p[1] + p[2]) / 3.0) {
-            continue;
-        }
-        tris.push(vs.map(|v| ids[v.fix().index()]));
-    }
-    // Slivers: a boundary vertex on a nearly straight run (within epsilon
-    // of the line through its neighbours) makes a triangle of no width with
-    // them; flipping its long side away fixes it.
     let fixed: FxHashSet<(VertexId, VertexId)> = bcontours
         .iter()
         .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
         .chain(outline.iter().copied())
         .map(|(a, b)| (a.min(b), a.max(b)))
         .collect();
-    let at = |v: VertexId| frame.to_2d(cx.pos(v));
-    let steiner = remove_slivers(&mut tris, &fixed, &at, eps);
+    // Twice at most: a second time with a point across each jog that the
+    // first left a needle on (see `jog_points`).
+    let mut jogs_done = false;
+    let (tris, steiner) = loop {
+        let added: Vec<Point2<f64>> = cdt
+            .vertices()
+            .skip(ids.len())
+            .map(|v| v.position())
+            .collect();
+        for p in added {
+            let v = cx.new_vertex(
+                format!("{fname}.v{next_inner}"),
+                frame.to_3d(DVec2::new(p.x, p.y)),
+            );
+            next_inner += 1;
+            ids.push(v);
+        }
+        // Inside or outside, decided topologically: a flood fill over the
+        // triangles from the convex hull, switching sides at every boundary
+        // segment (cell outlines do not count). Point location would be fooled
+        // by boundary points that are collinear only up to rounding.
+        let boundary: FxHashSet<(usize, usize)> = bcontours
+            .iter()
+            .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
+            .map(|(a, b)| key(handle[&a].index(), handle[&b].index()))
+            .collect();
+        let mut inside: Vec<Option<bool>> = vec![None; cdt.num_all_faces()];
+        let mut queue = std::collections::VecDeque::new();
+        for tri in cdt.inner_faces() {
+            for e in tri.adjacent_edges() {
+                if e.rev().face().is_outer() && inside[tri.fix().index()].is_none() {
+                    let crossing =
+                        boundary.contains(&key(e.from().fix().index(), e.to().fix().index()));
+                    inside[tri.fix().index()] = Some(crossing);
+                    queue.push_back(tri.fix());
+                }
+            }
+        }
+        while let Some(fh) = queue.pop_front() {
+            let tri = cdt.face(fh);
+            let here = inside[fh.index()].unwrap_or(false);
+            for e in tri.adjacent_edges() {
+                let Some(g) = e.rev().face().as_inner() else {
+                    continue;
+                };
+                if inside[g.fix().index()].is_some() {
+                    continue;
+                }
+                let crossing =
+                    boundary.contains(&key(e.from().fix().index(), e.to().fix().index()));
+                inside[g.fix().index()] = Some(here ^ crossing);
+                queue.push_back(g.fix());
+            }
+        }
+        let mut tris: Vec<[VertexId; 3]> = Vec::new();
+        for tri in cdt.inner_faces() {
+            if inside[tri.fix().index()] != Some(true) {
+                continue;
+            }
+            let vs = tri.vertices();
+            let p = vs.map(|v| DVec2::new(v.position().x, v.position().y));
+            if in_cell((p[0] + p[1] + p[2]) / 3.0) {
+                continue;
+            }
+            tris.push(vs.map(|v| ids[v.fix().index()]));
+        }
+        // Slivers: a boundary vertex on a nearly straight run (within epsilon
+        // of the line through its neighbours) makes a triangle of no width with
+        // them; flipping its long side away fixes it.
+        let at = |v: VertexId| frame.to_2d(cx.pos(v));
+        let steiner = remove_slivers(&mut tris, &fixed, &at, eps);
+        if !jogs_done {
+            jogs_done = true;
+            let jogs = jog_points(&tris, &steiner, &at, &bcontours, &segs, &seg_index, eps);
+            if !jogs.is_empty() {
+                for q in jogs {
+                    cdt.insert(Point2::new(q.x, q.y)).ok()?;
+                }
+                continue;
+            }
+        }
+        break (tris, steiner);
+    };
+    let mut tris = tris;
     if !steiner.is_empty() {
         let ids: Vec<VertexId> = steiner
             .iter()
@@ -1119,11 +1145,27 @@ fn remove_slivers(
             // In a long thin quad the good point sits off a short side,
             // about that side's length inside: the averages above land
             // near the far end.
+            // And where the quad is narrower than a short side is long
+            // (a 1 mm step on one side of a strip 0.2 mm wide), those
+            // overshoot the far side: fractions of the way across from
+            // the side's midpoint to the quad's far boundary.
             for j in 0..4 {
                 let (u, w) = (quad[j], quad[(j + 1) % 4]);
                 let inward = (w - u).perp();
+                let mid = (u + w) / 2.0;
                 for t in [0.25, 0.5, 1.0, 2.0] {
-                    consider((u + w) / 2.0 + inward * t);
+                    consider(mid + inward * t);
+                }
+                let across = (1..4)
+                    .filter_map(|s| {
+                        let (c, d) = (quad[(j + s) % 4], quad[(j + s + 1) % 4]);
+                        ray_segment(mid, inward, c, d)
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                if across.is_finite() {
+                    for f in [0.25, 0.5, 0.75] {
+                        consider(mid + inward * (across * f));
+                    }
                 }
             }
             match best {
@@ -1220,6 +1262,148 @@ fn cell_ok(
         }
     }
     true
+}
+
+/// Boundary edges shorter than this many epsilons are jogs (see [`jog_points`]).
+const JOG: f64 = 2.0;
+
+/// Points for the jogs of a face's boundary: an edge shorter than
+/// [`JOG`]·`eps` (a step of about epsilon in a straight run, left where
+/// two cuts a little more than epsilon apart meet it) makes a triangle
+/// higher than epsilon only with its apex nearly straight across it. The
+/// Delaunay apex may be a far vertex along the run: a needle, and no flip
+/// across its long side mends it (the quadrilateral there is as thin).
+/// For each such needle left in `tris` (after [`remove_slivers`], whose
+/// points are `steiner`), the best point near the line straight across
+/// the edge (by the least of the triangle's height and the point's
+/// distance from the rest of the boundary), when that is more than
+/// epsilon; inserted into the triangulation, it becomes the apex. (CAD
+/// building of seed 2999: a rug's side with a step of 1.03 epsilon.)
+fn jog_points(
+    tris: &[[VertexId; 3]],
+    steiner: &[DVec2],
+    at: &dyn Fn(VertexId) -> DVec2,
+    bcontours: &[Vec<VertexId>],
+    segs: &[(DVec2, DVec2)],
+    seg_index: &BoxIndex,
+    eps: f64,
+) -> Vec<DVec2> {
+    let mut out: Vec<DVec2> = Vec::new();
+    if eps.is_nan() || eps <= 0.0 {
+        return out;
+    }
+    let short: FxHashSet<(VertexId, VertexId)> = bcontours
+        .iter()
+        .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
+        .filter(|&(a, b)| {
+            let l = (at(b) - at(a)).length();
+            l > 0.0 && l < JOG * eps
+        })
+        .map(|(a, b)| (a.min(b), a.max(b)))
+        .collect();
+    if short.is_empty() {
+        return out;
+    }
+    let pos = |v: VertexId| {
+        if v.0 > u32::MAX - 1_000_000 && ((u32::MAX - v.0) as usize) < steiner.len() {
+            steiner[(u32::MAX - v.0) as usize]
+        } else {
+            at(v)
+        }
+    };
+    let height = |p: [DVec2; 3]| {
+        let longest = (0..3)
+            .map(|i| (p[(i + 1) % 3] - p[i]).length())
+            .fold(0.0, f64::max);
+        if longest > 0.0 {
+            (p[1] - p[0]).perp_dot(p[2] - p[0]).abs() / longest
+        } else {
+            0.0
+        }
+    };
+    // The distance from q to the boundary but segment `skip`.
+    let clearance = |q: DVec2, skip: (DVec2, DVec2)| {
+        let r = 64.0 * eps;
+        seg_index
+            .query(
+                (q - DVec2::splat(r)).extend(0.0),
+                (q + DVec2::splat(r)).extend(0.0),
+            )
+            .into_iter()
+            .map(|k| segs[k as usize])
+            .filter(|&(s0, s1)| !((s0 == skip.0 && s1 == skip.1) || (s0 == skip.1 && s1 == skip.0)))
+            .map(|(s0, s1)| {
+                let d = s1 - s0;
+                let t = ((q - s0).dot(d) / d.length_squared()).clamp(0.0, 1.0);
+                if t.is_nan() {
+                    (q - s0).length()
+                } else {
+                    (q - (s0 + d * t)).length()
+                }
+            })
+            .fold(r, f64::min)
+    };
+    let inside = |q: DVec2| {
+        segs.iter()
+            .filter(|(s0, s1)| {
+                (s0.y > q.y) != (s1.y > q.y)
+                    && q.x < s0.x + (q.y - s0.y) * (s1.x - s0.x) / (s1.y - s0.y)
+            })
+            .count()
+            % 2
+            == 1
+    };
+    for t in tris {
+        let p = t.map(pos);
+        if height(p) > eps {
+            continue;
+        }
+        for i in 0..3 {
+            let (a, b) = (t[i], t[(i + 1) % 3]);
+            if !short.contains(&(a.min(b), a.max(b))) {
+                continue;
+            }
+            let (pa, pb, po) = (p[i], p[(i + 1) % 3], p[(i + 2) % 3]);
+            let l = (pb - pa).length();
+            // Straight across, towards the triangle's side.
+            let mut n = (pb - pa).perp() / l;
+            if n.dot(po - pa) < 0.0 {
+                n = -n;
+            }
+            let mid = (pa + pb) / 2.0;
+            let mut best: Option<(f64, DVec2)> = None;
+            for deg in [0.0f64, 4.0, -4.0, 8.0, -8.0, 12.0, -12.0] {
+                let (sn, cs) = deg.to_radians().sin_cos();
+                let d = DVec2::new(n.x * cs - n.y * sn, n.x * sn + n.y * cs);
+                for k in [2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0, 24.0, 32.0] {
+                    let q = mid + d * (k * eps);
+                    let score = height([pa, pb, q]).min(clearance(q, (pa, pb)));
+                    if best.is_none_or(|(s, _)| score > s) && inside(q) {
+                        best = Some((score, q));
+                    }
+                }
+            }
+            if let Some((score, q)) = best
+                && score > eps
+                && out.iter().all(|o| o.distance(q) > 2.0 * eps)
+            {
+                out.push(q);
+            }
+        }
+    }
+    out
+}
+
+/// Where the ray `o + t·d` (t > 0) first meets segment c–d, as `t`.
+fn ray_segment(o: DVec2, dir: DVec2, c: DVec2, d: DVec2) -> Option<f64> {
+    let e = d - c;
+    let den = dir.perp_dot(e);
+    if den == 0.0 {
+        return None;
+    }
+    let t = (c - o).perp_dot(e) / den;
+    let s = (c - o).perp_dot(dir) / den;
+    (t > 0.0 && (0.0..=1.0).contains(&s)).then_some(t)
 }
 
 /// Whether segment p–q meets the open box (lo, hi) (Liang–Barsky).
