@@ -1228,7 +1228,7 @@ impl<'v> Solver<'v> {
                 });
             tr.corners(&self.mesh, &shot_b, near.as_ref(), &cancel)
         };
-        let Some((recv, total)) = corners else {
+        let Some((recv, total, kept)) = corners else {
             self.tail = Some(TailStats {
                 after_shots: self.shots.len(),
                 rays,
@@ -1299,7 +1299,7 @@ impl<'v> Solver<'v> {
                     ff: &ff,
                     first: &t.first,
                 };
-                tr.rest_corrections(&self.mesh, &recv, &shot_b, &near)
+                tr.rest_corrections(&self.mesh, &recv, &kept, &shot_b, &near)
             };
             for (x, c) in total.iter_mut().zip(corr) {
                 for k in 0..3 {

@@ -89,6 +89,13 @@ pub struct Near<'a> {
     pub first: &'a [Rgb],
 }
 
+/// Per patch corner (in [`Transport::corners`]' order), the patches near
+/// it that it sees, with F·V: `pairs[start[i]..start[i + 1]]`.
+pub struct NearPairs {
+    start: Vec<u32>,
+    pairs: Vec<(u32, f32)>,
+}
+
 /// Receivers nearer a patch's centre than this many patch sizes take its
 /// first bounce shaped ([`Near`]).
 const NEAR: f64 = 2.0;
@@ -601,15 +608,16 @@ impl Transport {
 
     /// The irradiance at every patch corner (the mesh's input-vertex copies
     /// that are some patch's corner) from patches of radiosity `s`: the
-    /// corners, in id order, and their irradiance. `None` when `cancel`
-    /// was raised meanwhile.
+    /// corners, in id order, their irradiance, and (with `near`) the
+    /// patches near each that it sees, for [`Transport::rest_corrections`].
+    /// `None` when `cancel` was raised meanwhile.
     pub fn corners(
         &self,
         mesh: &Mesh,
         s: &[Rgb],
         near: Option<&Near>,
         cancel: &(dyn Fn() -> bool + Sync),
-    ) -> Option<(Vec<VertId>, Vec<Rgb>)> {
+    ) -> Option<(Vec<VertId>, Vec<Rgb>, NearPairs)> {
         let nv = mesh.num_vertices();
         // The patches at each corner (for its inward direction and size).
         let (count, at) = patches_at_corners(mesh);
@@ -621,38 +629,80 @@ impl Transport {
             .map(|v| VertId(v as u32))
             .collect();
         let mut out = Vec::with_capacity(recv.len());
+        let mut kept = NearPairs {
+            start: vec![0],
+            pairs: Vec::new(),
+        };
         for chunk in recv.chunks(CHUNK) {
             if cancel() {
                 return None;
             }
-            let part: Vec<Rgb> = chunk
+            let part: Vec<(Rgb, Vec<(u32, f32)>)> = chunk
                 .par_iter()
                 .map(|&v| {
                     let patches = &at[count[v.idx()] as usize..count[v.idx() + 1] as usize];
                     let (inward, size) = self.corner_frame(mesh.receiver_pos(v), patches);
-                    self.at(mesh, v, inward, size, patches, s, near)
+                    let mut keep = Vec::new();
+                    let h = self.at_keeping(
+                        mesh,
+                        v,
+                        inward,
+                        size,
+                        patches,
+                        s,
+                        near,
+                        near.is_some().then_some(&mut keep),
+                    );
+                    (h, keep)
                 })
                 .collect();
-            out.extend(part);
+            for (h, keep) in part {
+                out.push(h);
+                kept.pairs.extend(keep);
+                kept.start.push(kept.pairs.len() as u32);
+            }
         }
-        Some((recv, out))
+        kept.pairs.shrink_to_fit();
+        Some((recv, out, kept))
     }
 
-    /// [`Transport::rest_correction`] at each of the corners `recv` (as
-    /// [`Transport::corners`] returned them).
+    /// What shaping the later bounces changes at each of the corners `recv`
+    /// (as [`Transport::corners`] returned them, with the patches near each
+    /// that it sees, `kept`), from those patches only: a second, cheap pass
+    /// over the corners once their first gather has given the tail's light
+    /// its shape.
     pub fn rest_corrections(
         &self,
         mesh: &Mesh,
         recv: &[VertId],
+        kept: &NearPairs,
         s: &[Rgb],
         near: &Near,
     ) -> Vec<Rgb> {
         let (count, at) = patches_at_corners(mesh);
         recv.par_iter()
-            .map(|&v| {
+            .enumerate()
+            .map(|(i, &v)| {
                 let patches = &at[count[v.idx()] as usize..count[v.idx() + 1] as usize];
                 let (inward, size) = self.corner_frame(mesh.receiver_pos(v), patches);
-                self.rest_correction(mesh, v, inward, size, patches, s, near)
+                let r = self.vertex_as_receiver(mesh, v, inward, size);
+                let mut h = [0.0; 3];
+                let pairs = &kept.pairs[kept.start[i] as usize..kept.start[i + 1] as usize];
+                for &(p, w) in pairs {
+                    let sh = &self.shooters[p as usize];
+                    let x = offset_receiver(r.x, || r.inward, sh.centre, sh.normal, sh.delta);
+                    if x.distance_squared(sh.centre) >= (NEAR * sh.size).powi(2) {
+                        continue;
+                    }
+                    let Some(f) = (near.ff)(p, x, r.n).1 else {
+                        continue;
+                    };
+                    let (b, u) = (s[p as usize], near.first[p as usize]);
+                    for k in 0..3 {
+                        h[k] += (f - w as f64) * (b[k] - u[k]);
+                    }
+                }
+                h
             })
             .collect()
     }
@@ -702,14 +752,7 @@ impl Transport {
         size: f64,
         at: &[u32],
     ) -> (Receiver, Vec<u32>) {
-        let r = Receiver {
-            x: mesh.receiver_pos(v),
-            n: mesh.vertex_normal(v),
-            surface: mesh.vertex_surface(v).0,
-            inward,
-            size,
-            seed: mix(v.0 as u64),
-        };
+        let r = self.vertex_as_receiver(mesh, v, inward, size);
         let cand = if self.seen_start.is_empty()
             || !at
                 .iter()
@@ -720,6 +763,18 @@ impl Transport {
             self.near_candidates(at)
         };
         (r, cand)
+    }
+
+    /// Mesh vertex `v` as a receiver.
+    fn vertex_as_receiver(&self, mesh: &Mesh, v: VertId, inward: DVec3, size: f64) -> Receiver {
+        Receiver {
+            x: mesh.receiver_pos(v),
+            n: mesh.vertex_normal(v),
+            surface: mesh.vertex_surface(v).0,
+            inward,
+            size,
+            seed: mix(v.0 as u64),
+        }
     }
 
     /// A patch corner's inward direction (towards the centres of the
@@ -754,10 +809,34 @@ impl Transport {
         s: &[Rgb],
         near: Option<&Near>,
     ) -> Rgb {
+        self.at_keeping(mesh, v, inward, size, at, s, near, None)
+    }
+
+    /// [`Transport::at`], keeping in `keep` the patches it sees whose
+    /// centre lies within `NEAR` + 1 of their sizes (those whose shaped
+    /// light [`Transport::rest_corrections`] may take), with their F·V.
+    #[allow(clippy::too_many_arguments)]
+    fn at_keeping(
+        &self,
+        mesh: &Mesh,
+        v: VertId,
+        inward: DVec3,
+        size: f64,
+        at: &[u32],
+        s: &[Rgb],
+        near: Option<&Near>,
+        mut keep: Option<&mut Vec<(u32, f32)>>,
+    ) -> Rgb {
         let (r, cand) = self.vertex_receiver(mesh, v, inward, size, at);
         let row = self.row(&r, cand);
         let mut h = [0.0; 3];
         for (p, w) in row {
+            if let Some(keep) = keep.as_deref_mut() {
+                let sh = &self.shooters[p as usize];
+                if r.x.distance_squared(sh.centre) < (NEAR * sh.size + sh.size).powi(2) {
+                    keep.push((p, w));
+                }
+            }
             let b = s[p as usize];
             // The first bounce (and the later ones) shaped, near the patch.
             let (fu, fr) = self.near_ff(&r, p, w as f64, near);
@@ -782,47 +861,6 @@ impl Transport {
         }
         let (fu, fr) = (nr.ff)(p, x, r.n);
         (fu.unwrap_or(w), fr.unwrap_or(w))
-    }
-
-    /// What shaping the later bounces changes at mesh vertex `v` (see
-    /// [`Transport::at`]), from the patches near it only: a second, cheap
-    /// pass over the corners once their first gather has given the tail's
-    /// light its shape.
-    #[allow(clippy::too_many_arguments)]
-    pub fn rest_correction(
-        &self,
-        mesh: &Mesh,
-        v: VertId,
-        inward: DVec3,
-        size: f64,
-        at: &[u32],
-        s: &[Rgb],
-        near: &Near,
-    ) -> Rgb {
-        let (r, cand) = self.vertex_receiver(mesh, v, inward, size, at);
-        let cand: Vec<u32> = cand
-            .into_iter()
-            .filter(|&p| {
-                let sh = &self.shooters[p as usize];
-                r.x.distance_squared(sh.centre) < (NEAR * sh.size + sh.size).powi(2)
-            })
-            .collect();
-        let mut h = [0.0; 3];
-        for (p, w) in self.row(&r, cand) {
-            let sh = &self.shooters[p as usize];
-            let x = offset_receiver(r.x, || r.inward, sh.centre, sh.normal, sh.delta);
-            if x.distance_squared(sh.centre) >= (NEAR * sh.size).powi(2) {
-                continue;
-            }
-            let Some(f) = (near.ff)(p, x, r.n).1 else {
-                continue;
-            };
-            let (b, u) = (s[p as usize], near.first[p as usize]);
-            for k in 0..3 {
-                h[k] += (f - w as f64) * (b[k] - u[k]);
-            }
-        }
-        h
     }
 
     pub fn pairs(&self) -> usize {
