@@ -1308,6 +1308,9 @@ impl<'v> Solver<'v> {
             }
             t_all = interpolate(&self.mesh, &total);
         }
+        // (The corners' near pairs are done with: freed before the check
+        // and the refinement grow the mesh.)
+        drop(kept);
         for (h, t) in self.h.iter_mut().zip(&t_all) {
             *h = add(*h, *t);
         }
