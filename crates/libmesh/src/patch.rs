@@ -1333,13 +1333,7 @@ fn jog_points(
             .map(|k| segs[k as usize])
             .filter(|&(s0, s1)| !((s0 == skip.0 && s1 == skip.1) || (s0 == skip.1 && s1 == skip.0)))
             .map(|(s0, s1)| {
-                let d = s1 - s0;
-                let t = ((q - s0).dot(d) / d.length_squared()).clamp(0.0, 1.0);
-                if t.is_nan() {
-                    (q - s0).length()
-                } else {
-                    (q - (s0 + d * t)).length()
-                }
+                geom::point_segment_distance(q.extend(0.0), s0.extend(0.0), s1.extend(0.0)).0
             })
             .fold(r, f64::min)
     };
