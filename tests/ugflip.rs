@@ -94,6 +94,29 @@ fn automatic_mode_orients_as_a_person_would() {
     }
 }
 
+/// The same fixtures, at a tenth of their size (boxes of table legs), on a
+/// site: CAD exports put buildings at coordinates of half a million and
+/// four million units (seed 1175 of the placed property test: a table leg
+/// turned inside out, its signed volume taken from the origin and decided
+/// by rounding).
+#[test]
+fn automatic_mode_orients_far_from_the_origin() {
+    for name in ["floating-box", "room", "furnished-room", "open-box"] {
+        let path = fixture(&format!("flip/{name}.ug"));
+        let mut m = ug::parse(std::fs::read(&path).unwrap().as_slice(), "fixture")
+            .unwrap()
+            .model;
+        for v in &mut m.vertices {
+            v.pos = v.pos * 0.1 + glam::DVec3::new(512_345.6, 4_187_654.3, 120.5);
+        }
+        let src = ug::write_string(&m);
+        let out = run("ugflip", &[], Some(src.as_bytes()));
+        assert!(out.status.success(), "{name}");
+        let text = String::from_utf8(out.stdout).unwrap();
+        assert_faces_point_as_named(&text, &format!("{name} on a site"));
+    }
+}
+
 #[test]
 fn ambiguous_parts_can_be_made_double_sided() {
     let path = fixture("flip/wall-window.ug");

@@ -647,16 +647,21 @@ fn decide(
             })
         });
     if closed {
+        // The signed volume, from the middle of the component's box: from
+        // the origin, the tetrahedra of a table leg on a site half a
+        // million metres away are 10¹⁵ times its volume, whose sign their
+        // rounding decided (a leg turned inside out).
+        let (lo, hi) = bbox_of(mesh, members);
+        let o = (lo + hi) * 0.5;
         let mut vol = 0.0;
         for &f in members {
             let pts = mesh.face_points(f);
-            let flat: Vec<DVec3> = pts.iter().flatten().copied().collect();
+            let flat: Vec<DVec3> = pts.iter().flatten().map(|&p| p - o).collect();
             for t in face_triangles(&pts) {
                 let v = flat[t[0]].dot(flat[t[1]].cross(flat[t[2]])) / 6.0;
                 vol += if rel[f.idx()] { -v } else { v };
             }
         }
-        let (lo, hi) = bbox_of(mesh, members);
         let size = (hi - lo).length();
         if vol.abs() > opts.eps * total_area.max(size * size) {
             let encloses = encloses(mesh, members, samples, c, objects, object_of, opts, lo, hi);

@@ -70,8 +70,12 @@ pub fn clip_to_front(poly: &[DVec3], x: DVec3, n: DVec3, out: &mut Vec<DVec3>) {
 }
 
 /// Form factor from the point `x` (unit normal `n`) to the polygon, the
-/// polygon being clipped to the point's front half-space first.
+/// polygon being clipped to the point's front half-space first. (A
+/// polygon wholly in front is integrated as it is, without a copy.)
 pub fn point_to_polygon(x: DVec3, n: DVec3, poly: &[DVec3]) -> f64 {
+    if poly.iter().all(|&p| n.dot(p - x) >= 0.0) {
+        return contour_integral(x, n, poly);
+    }
     let mut clipped = Vec::with_capacity(poly.len() + 2);
     clip_to_front(poly, x, n, &mut clipped);
     contour_integral(x, n, &clipped)
