@@ -363,6 +363,23 @@ fn a_step_of_about_epsilon_in_a_side_gets_an_apex_straight_across() {
     );
 }
 
+/// A side 1.2 epsilon long in a straight side of a strip 27 epsilon wide
+/// (fixtures/cut/tiny-triangle-on-a-step.ug, from a placed building): the
+/// point across it made a triangle wide enough (1.12 epsilon) but of area
+/// under epsilon squared, degenerate to ugcheck; ugcut's sliver tests now
+/// take the area too. (The strip is planar only to within a fraction of
+/// epsilon across its 27: its pieces, each flat in its own plane, add up
+/// to its projected area within 1.1e-6.)
+#[test]
+fn a_triangle_on_a_short_side_has_area_over_epsilon_squared() {
+    cuts_cleanly(
+        "cut/tiny-triangle-on-a-step.ug",
+        "1.191081e-5",
+        &["0.7", "0.2", "2%"],
+        1e-5,
+    );
+}
+
 /// ugcut of the fixture at each length (with epsilon `eps`): only sound
 /// patches, no intersecting pair, the area of every material kept to `tol`
 /// (relative).

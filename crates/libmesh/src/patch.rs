@@ -1068,8 +1068,7 @@ fn remove_slivers(
                 (best, len) = (i, l);
             }
         }
-        let area2 = (p[1] - p[0]).perp_dot(p[2] - p[0]).abs();
-        (if len > 0.0 { area2 / len } else { 0.0 }, best)
+        (width(p, eps), best)
     };
     let ccw = |p: [DVec2; 3]| orient2d(p[0], p[1], p[2]) > 0;
     let mut by_edge: FxHashMap<(VertexId, VertexId), usize> = FxHashMap::default();
@@ -1311,16 +1310,7 @@ fn jog_points(
             at(v)
         }
     };
-    let height = |p: [DVec2; 3]| {
-        let longest = (0..3)
-            .map(|i| (p[(i + 1) % 3] - p[i]).length())
-            .fold(0.0, f64::max);
-        if longest > 0.0 {
-            (p[1] - p[0]).perp_dot(p[2] - p[0]).abs() / longest
-        } else {
-            0.0
-        }
-    };
+    let height = |p: [DVec2; 3]| width(p, eps);
     // The distance from q to the boundary but segment `skip`.
     let clearance = |q: DVec2, skip: (DVec2, DVec2)| {
         let r = 64.0 * eps;
@@ -1386,6 +1376,29 @@ fn jog_points(
         }
     }
     out
+}
+
+/// How wide a triangle is, as the sliver tests measure it against
+/// epsilon: its height over its longest side, or its area over epsilon
+/// where that is less. ugcheck calls a triangle degenerate when either is
+/// at most epsilon (height: narrower than epsilon; area: at most ε²), and
+/// a triangle all of whose sides are under 2 epsilon can pass the first
+/// and not the second (property seed 2499, placed: a point 1.6 epsilon
+/// across a side 1.2 epsilon long, area 0.96 ε²).
+fn width(p: [DVec2; 3], eps: f64) -> f64 {
+    let longest = (0..3)
+        .map(|i| (p[(i + 1) % 3] - p[i]).length())
+        .fold(0.0, f64::max);
+    if longest <= 0.0 {
+        return 0.0;
+    }
+    let area2 = (p[1] - p[0]).perp_dot(p[2] - p[0]).abs();
+    let h = area2 / longest;
+    if eps > 0.0 {
+        h.min(area2 / (2.0 * eps))
+    } else {
+        h
+    }
 }
 
 /// Where the ray `o + t·d` (t > 0) first meets segment c–d, as `t`.
