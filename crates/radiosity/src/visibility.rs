@@ -2,8 +2,8 @@
 //! ray-cast implementation (the reference, and the fallback without a GPU).
 
 use geom::bvh::{
-    Node, RayFrame, Shaft, ShaftTri, Triangle, build_nodes, push_children, ray_triangle_with,
-    shaft_triangles, slab_entry,
+    Node, RayFrame, Shaft, ShaftTri, Triangle, build_nodes_at, far_base, push_children,
+    ray_triangle_with, shaft_triangles, slab_entry,
 };
 use glam::DVec3;
 use libmesh::{Mesh, SurfaceId, VertId};
@@ -104,6 +104,8 @@ pub struct RayVisibility {
     pts: Vec<DVec3>,
     tris: Vec<Tri>,
     nodes: Vec<Node>,
+    /// What the nodes' boxes are measured from ([`geom::bvh::far_base`]).
+    base: DVec3,
     /// The shafts' slack ([`geom::bvh::shaft_slack`]).
     tol: f64,
 }
@@ -140,12 +142,22 @@ impl RayVisibility {
                 });
             }
         }
-        let nodes = build_nodes(&mut tris, |t| t.v.map(|v| pts[v as usize]));
+        let (lo, hi) = pts
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
+                (lo.min(p), hi.max(p))
+            });
+        let (nodes, base) = build_nodes_at(
+            &mut tris,
+            |t| t.v.map(|v| pts[v as usize]),
+            far_base(lo, hi),
+        );
         let tol = geom::bvh::shaft_slack(&pts);
         RayVisibility {
             pts,
             tris,
             nodes,
+            base,
             tol,
         }
     }
@@ -176,7 +188,7 @@ impl RayVisibility {
         b: SurfaceId,
     ) -> Option<Vec<ShaftTri>> {
         let shaft = Shaft::new(piece, to, &[], self.tol);
-        shaft_triangles(&self.nodes, &shaft, SHAFT_MAX, self.tol, |k| {
+        shaft_triangles(&self.nodes, self.base, &shaft, SHAFT_MAX, self.tol, |k| {
             let t = &self.tris[k as usize];
             (t.surface != a.0 && t.surface != b.0).then(|| t.v.map(|v| self.pts[v as usize]))
         })
@@ -232,8 +244,10 @@ impl RayVisibility {
         }
         let inv = DVec3::ONE / dir;
         let frame = RayFrame::new(dir)?;
+        // The boxes are measured from `base`; the triangles are not.
+        let rel = origin - self.base;
         let root = &self.nodes[0];
-        let t0 = slab_entry(root.lo(), root.hi(), origin, inv, tmin, tmax)?;
+        let t0 = slab_entry(root.lo(), root.hi(), rel, inv, tmin, tmax)?;
         // Nearer child first: a ray toward a vertex in another room is
         // usually stopped by a wall near its start, so the boxes near the
         // origin are the likely place of a hit. Whether anything is hit
@@ -267,7 +281,7 @@ impl RayVisibility {
                 }
             } else {
                 assert!(sp + 2 <= stack.len(), "BVH deeper than its traversal stack");
-                push_children(&self.nodes, n, origin, inv, tmin, tmax, &mut stack, &mut sp);
+                push_children(&self.nodes, n, rel, inv, tmin, tmax, &mut stack, &mut sp);
             }
         }
         best
