@@ -277,10 +277,11 @@ fn dirty_buildings_regression_seeds() {
 /// 2499 a triangle of area under ε² from ugcut, 1326 two overlapping
 /// coplanar pairs after ugcut (a column face and a table leg's crossing
 /// it at 1.7°; clean since ugcut's sliver tests take the area, which
-/// meshes the faces along the crossing otherwise).
+/// meshes the faces along the crossing otherwise); 3871 a needle on a
+/// step of 4 epsilon after ugcut.
 #[test]
 fn dirty_buildings_placed_on_a_site() {
-    run_placed((1160..1200).chain([1326, 2499]).collect(), true);
+    run_placed((1160..1200).chain([1326, 2499, 3871]).collect(), true);
 }
 
 /// More seeds by hand: `UG_SEEDS=200..1200 cargo test --release --test

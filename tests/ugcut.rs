@@ -380,6 +380,20 @@ fn a_triangle_on_a_short_side_has_area_over_epsilon_squared() {
     );
 }
 
+/// A step of 4 epsilon in a strip's straight side
+/// (fixtures/cut/needle-on-a-4-epsilon-step.ug, from a placed building):
+/// the Delaunay apex of the triangle on it was the strip's far corner, a
+/// needle; jogs are now steps under 8 epsilon, not 2.
+#[test]
+fn a_step_of_a_few_epsilon_gets_an_apex_straight_across() {
+    cuts_cleanly(
+        "cut/needle-on-a-4-epsilon-step.ug",
+        "9.991158e-6",
+        &["0.7", "0.2", "2%"],
+        1e-5,
+    );
+}
+
 /// ugcut of the fixture at each length (with epsilon `eps`): only sound
 /// patches, no intersecting pair, the area of every material kept to `tol`
 /// (relative).

@@ -1263,8 +1263,12 @@ fn cell_ok(
     true
 }
 
-/// Boundary edges shorter than this many epsilons are jogs (see [`jog_points`]).
-const JOG: f64 = 2.0;
+/// Boundary edges shorter than this many epsilons are jogs (see
+/// [`jog_points`]). 2 until placed seed 3871: a step of 4 epsilon in a
+/// strip's side had the strip's far corner as its Delaunay apex (a needle,
+/// with the next vertex up the side 0.5 epsilon from it). Only needles on
+/// such edges get a point, so faces without one mesh as before.
+const JOG: f64 = 8.0;
 
 /// Points for the jogs of a face's boundary: an edge shorter than
 /// [`JOG`]·`eps` (a step of about epsilon in a straight run, left where
