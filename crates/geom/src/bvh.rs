@@ -83,7 +83,7 @@ fn f32_up(x: f64) -> f32 {
 pub struct Bvh {
     nodes: Vec<Node>,
     tris: Vec<Triangle>,
-    /// What the nodes' boxes are measured from ([`far_base`]).
+    /// What the nodes' boxes are measured from ([`build_nodes`]).
     base: DVec3,
 }
 
@@ -92,13 +92,7 @@ pub const LEAF: usize = 4;
 
 impl Bvh {
     pub fn new(mut tris: Vec<Triangle>) -> Bvh {
-        let (lo, hi) = tris
-            .iter()
-            .flat_map(|t| t.p)
-            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
-                (lo.min(p), hi.max(p))
-            });
-        let (nodes, base) = build_nodes_at(&mut tris, |t| t.p, far_base(lo, hi));
+        let (nodes, base) = build_nodes(&mut tris, |t| t.p);
         Bvh { nodes, tris, base }
     }
 
@@ -139,14 +133,7 @@ impl Bvh {
         if self.nodes.is_empty() {
             return;
         }
-        // Relative to the boxes' base, widened by the rounding of that.
-        let (lo, hi) = if self.base == DVec3::ZERO {
-            (lo, hi)
-        } else {
-            let big = lo.abs().max(hi.abs()).max(self.base.abs()).max_element();
-            let pad = DVec3::splat(4.0 * big * f64::EPSILON);
-            (lo - self.base - pad, hi - self.base + pad)
-        };
+        let (lo, hi) = measured_from(lo, hi, self.base);
         let mut stack: Vec<u32> = Vec::with_capacity(64);
         stack.push(0);
         while let Some(ni) = stack.pop() {
@@ -326,36 +313,15 @@ pub fn push_children(
 /// discovery rays in a 26,000-patch building took about half the time:
 /// an architectural model mixes floors and walls metres long with tiles
 /// and trims of centimetres, which a median split cuts through.
-pub fn build_nodes<T>(items: &mut [T], corners: impl Fn(&T) -> [DVec3; 3]) -> Vec<Node> {
-    build_nodes_at(items, corners, DVec3::ZERO).0
-}
-
-/// Where a model's BVH boxes are measured from: the origin, or, for a model
-/// far from it (its middle more than 16 times its extent away: a building
-/// on a site 4·10⁶ m from the origin), its middle, so that the f32 boxes
-/// are as tight there as near the origin (rounded outward from 4·10⁶ m
-/// they were half a metre wide: a one-room building converged 10% slower).
-pub fn far_base(lo: DVec3, hi: DVec3) -> DVec3 {
-    let mid = (lo + hi) * 0.5;
-    let extent = (hi - lo).max_element();
-    if mid.is_finite() && extent.is_finite() && mid.abs().max_element() > 16.0 * extent {
-        mid
-    } else {
-        DVec3::ZERO
-    }
-}
-
-/// [`build_nodes`] with the boxes stored relative to `base` ([`far_base`];
-/// the walks subtract it from a ray's origin), and the slack of each box
-/// side beyond rounding outward to f32: four units in the last place of
-/// the largest coordinate, which covers the rounding of `p − base` and of a
-/// ray's origin minus `base` (0 when `base` is the origin: the boxes are
-/// then exactly [`build_nodes`]'s).
-pub fn build_nodes_at<T>(
-    items: &mut [T],
-    corners: impl Fn(&T) -> [DVec3; 3],
-    base: DVec3,
-) -> (Vec<Node>, DVec3) {
+///
+/// The boxes are measured from the point [`build_nodes`] returns with them
+/// (the walks subtract it from a ray's origin): the origin, or, for items
+/// far from it (their middle more than 16 times their extent away: a
+/// building on a site 4·10⁶ m from the origin), their middle, so that the
+/// f32 boxes are as tight there as near the origin (rounded outward from
+/// 4·10⁶ m they were half a metre wide: a one-room building converged 10%
+/// slower). Near the origin the boxes are the same bits as before.
+pub fn build_nodes<T>(items: &mut [T], corners: impl Fn(&T) -> [DVec3; 3]) -> (Vec<Node>, DVec3) {
     const BINS: usize = 16;
     let mut nodes = Vec::with_capacity(2 * items.len() / LEAF + 2);
     if items.is_empty() {
@@ -375,6 +341,11 @@ pub fn build_nodes_at<T>(
             (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]))
         })
         .collect();
+    let (lo, hi) = boxes.iter().fold(
+        (DVec3::INFINITY, DVec3::NEG_INFINITY),
+        |(lo, hi), &(a, b)| (lo.min(a), hi.max(b)),
+    );
+    let base = far_base(lo, hi);
     let mut order: Vec<u32> = (0..items.len() as u32).collect();
     let centroid = |k: u32| {
         let (lo, hi) = boxes[k as usize];
@@ -401,13 +372,8 @@ pub fn build_nodes_at<T>(
             clo = clo.min(c);
             chi = chi.max(c);
         }
-        if base == DVec3::ZERO {
-            nodes[ni].set_box(lo, hi);
-        } else {
-            let big = lo.abs().max(hi.abs()).max(base.abs()).max_element();
-            let pad = DVec3::splat(4.0 * big * f64::EPSILON);
-            nodes[ni].set_box(lo - base - pad, hi - base + pad);
-        }
+        let (blo, bhi) = measured_from(lo, hi, base);
+        nodes[ni].set_box(blo, bhi);
         let ext = chi - clo;
         if e - s <= LEAF || ext.max_element() <= 0.0 {
             nodes[ni].first = s as u32;
@@ -506,6 +472,30 @@ pub fn build_nodes_at<T>(
     // Put the items in leaf order.
     permute(items, &order);
     (nodes, base)
+}
+
+/// Where boxes spanning [lo, hi] are measured from ([`build_nodes`]).
+fn far_base(lo: DVec3, hi: DVec3) -> DVec3 {
+    let mid = (lo + hi) * 0.5;
+    let extent = (hi - lo).max_element();
+    if mid.is_finite() && extent.is_finite() && mid.abs().max_element() > 16.0 * extent {
+        mid
+    } else {
+        DVec3::ZERO
+    }
+}
+
+/// The box [lo, hi] measured from `base`: as it is from the origin, else
+/// shifted and widened on each side by four units in the last place of the
+/// largest coordinate, which covers the rounding of the shift (of a box's
+/// corners, of a query box, of a ray's origin).
+fn measured_from(lo: DVec3, hi: DVec3, base: DVec3) -> (DVec3, DVec3) {
+    if base == DVec3::ZERO {
+        return (lo, hi);
+    }
+    let big = lo.abs().max(hi.abs()).max(base.abs()).max_element();
+    let pad = DVec3::splat(4.0 * big * f64::EPSILON);
+    (lo - base - pad, hi - base + pad)
 }
 
 /// Reorders `items` so that `items[i]` becomes the old `items[order[i]]`.
@@ -760,11 +750,11 @@ mod tests {
         v
     }
 
-    #[test]
-    fn nearest_hit_matches_brute_force() {
-        let tris = grid(10);
-        let bvh = Bvh::new(tris.clone());
-        let mut seed = 7u64;
+    /// Nearest hits of 500 random rays upward through the grid `tris`
+    /// (moved by `off`) agree with brute force to `tol`.
+    fn assert_nearest_hits_agree(tris: &[Triangle], off: DVec3, seed: u64, tol: f64) {
+        let bvh = Bvh::new(tris.to_vec());
+        let mut seed = seed;
         let mut rnd = || {
             seed = seed
                 .wrapping_mul(6364136223846793005)
@@ -772,7 +762,7 @@ mod tests {
             (seed >> 11) as f64 / (1u64 << 53) as f64
         };
         for _ in 0..500 {
-            let o = DVec3::new(rnd() * 12.0 - 1.0, rnd() * 12.0 - 1.0, -1.0 + rnd() * 0.5);
+            let o = off + DVec3::new(rnd() * 12.0 - 1.0, rnd() * 12.0 - 1.0, -1.0 + rnd() * 0.5);
             let d = DVec3::new(rnd() - 0.5, rnd() - 0.5, 1.0).normalize();
             let brute = tris
                 .iter()
@@ -785,10 +775,15 @@ mod tests {
             let got = bvh.intersect(o, d, 1e-9, f64::INFINITY, |_| true);
             match (brute, got) {
                 (None, None) => {}
-                (Some((t, _)), Some(h)) => assert!((t - h.t).abs() < 1e-12),
+                (Some((t, _)), Some(h)) => assert!((t - h.t).abs() < tol),
                 other => panic!("mismatch {other:?}"),
             }
         }
+    }
+
+    #[test]
+    fn nearest_hit_matches_brute_force() {
+        assert_nearest_hits_agree(&grid(10), DVec3::ZERO, 7, 1e-12);
     }
 
     /// Every triangle whose box meets the query box comes (touching
@@ -843,7 +838,7 @@ mod tests {
     }
 
     /// The same grid on a site 4·10⁶ units from the origin, where the boxes
-    /// are measured from the model's middle ([`far_base`]): nearest hits
+    /// are measured from the model's middle ([`build_nodes`]): nearest hits
     /// and box queries agree with brute force, and rays through the grid's
     /// shared edges and corners (on the boxes' planes) are all stopped.
     #[test]
@@ -858,6 +853,7 @@ mod tests {
             .collect();
         let bvh = Bvh::new(tris.clone());
         assert_ne!(bvh.base, DVec3::ZERO);
+        assert_nearest_hits_agree(&tris, off, 17, 1e-9);
         let mut seed = 17u64;
         let mut rnd = || {
             seed = seed
@@ -865,24 +861,6 @@ mod tests {
                 .wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64
         };
-        for _ in 0..500 {
-            let o = off + DVec3::new(rnd() * 12.0 - 1.0, rnd() * 12.0 - 1.0, -1.0 + rnd() * 0.5);
-            let d = DVec3::new(rnd() - 0.5, rnd() - 0.5, 1.0).normalize();
-            let brute = tris
-                .iter()
-                .filter_map(|t| {
-                    ray_triangle(o, d, t)
-                        .filter(|&x| x > 1e-9)
-                        .map(|x| (x, t.id))
-                })
-                .min_by(|a, b| a.0.total_cmp(&b.0));
-            let got = bvh.intersect(o, d, 1e-9, f64::INFINITY, |_| true);
-            match (brute, got) {
-                (None, None) => {}
-                (Some((t, _)), Some(h)) => assert!((t - h.t).abs() < 1e-9),
-                other => panic!("mismatch {other:?}"),
-            }
-        }
         // Straight down through every grid point and edge midpoint of the
         // top layer: the top layer stops each.
         for i in 0..=20 {
@@ -1291,9 +1269,9 @@ impl ShaftTri {
     }
 }
 
-/// The items of a BVH (`nodes`, built by [`build_nodes_at`] with its
-/// boxes measured from `base`) whose triangle may meet the shaft: `tri(k)` gives item `k`'s corners, or `None` to
-/// leave it out. `None` when more than `max` are found (rays are then the
+/// The items of a BVH (`nodes` and `base`, built by [`build_nodes`])
+/// whose triangle may meet the shaft: `tri(k)` gives item `k`'s corners,
+/// or `None` to leave it out. `None` when more than `max` are found (rays are then the
 /// cheaper way).
 pub fn shaft_triangles(
     nodes: &[Node],

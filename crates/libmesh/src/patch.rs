@@ -1314,7 +1314,6 @@ fn jog_points(
             at(v)
         }
     };
-    let height = |p: [DVec2; 3]| width(p, eps);
     // The distance from q to the boundary but segment `skip`.
     let clearance = |q: DVec2, skip: (DVec2, DVec2)| {
         let r = 64.0 * eps;
@@ -1343,7 +1342,7 @@ fn jog_points(
     };
     for t in tris {
         let p = t.map(pos);
-        if height(p) > eps {
+        if width(p, eps) > eps {
             continue;
         }
         for i in 0..3 {
@@ -1365,7 +1364,7 @@ fn jog_points(
                 let d = DVec2::new(n.x * cs - n.y * sn, n.x * sn + n.y * cs);
                 for k in [2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0, 24.0, 32.0] {
                     let q = mid + d * (k * eps);
-                    let score = height([pa, pb, q]).min(clearance(q, (pa, pb)));
+                    let score = width([pa, pb, q], eps).min(clearance(q, (pa, pb)));
                     if best.is_none_or(|(s, _)| score > s) && inside(q) {
                         best = Some((score, q));
                     }

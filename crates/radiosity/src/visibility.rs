@@ -2,8 +2,8 @@
 //! ray-cast implementation (the reference, and the fallback without a GPU).
 
 use geom::bvh::{
-    Node, RayFrame, Shaft, ShaftTri, Triangle, build_nodes_at, far_base, push_children,
-    ray_triangle_with, shaft_triangles, slab_entry,
+    Node, RayFrame, Shaft, ShaftTri, Triangle, build_nodes, push_children, ray_triangle_with,
+    shaft_triangles, slab_entry,
 };
 use glam::DVec3;
 use libmesh::{Mesh, SurfaceId, VertId};
@@ -104,7 +104,7 @@ pub struct RayVisibility {
     pts: Vec<DVec3>,
     tris: Vec<Tri>,
     nodes: Vec<Node>,
-    /// What the nodes' boxes are measured from ([`geom::bvh::far_base`]).
+    /// What the nodes' boxes are measured from ([`build_nodes`]).
     base: DVec3,
     /// The shafts' slack ([`geom::bvh::shaft_slack`]).
     tol: f64,
@@ -142,16 +142,7 @@ impl RayVisibility {
                 });
             }
         }
-        let (lo, hi) = pts
-            .iter()
-            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
-                (lo.min(p), hi.max(p))
-            });
-        let (nodes, base) = build_nodes_at(
-            &mut tris,
-            |t| t.v.map(|v| pts[v as usize]),
-            far_base(lo, hi),
-        );
+        let (nodes, base) = build_nodes(&mut tris, |t| t.v.map(|v| pts[v as usize]));
         let tol = geom::bvh::shaft_slack(&pts);
         RayVisibility {
             pts,
