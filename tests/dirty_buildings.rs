@@ -8,7 +8,7 @@
 
 use std::collections::BTreeMap;
 
-use ugkit::{run, run_ok};
+use ugkit::{pipe, run, run_ok};
 
 fn building(seed: u64, storeys: usize) -> Vec<u8> {
     run_ok(
@@ -25,22 +25,6 @@ fn building(seed: u64, storeys: usize) -> Vec<u8> {
         None,
     )
     .into_bytes()
-}
-
-/// Runs the stages in order, each on the previous one's output; every stage
-/// must succeed.
-fn pipe(input: &[u8], stages: &[(&str, &[&str])]) -> Vec<u8> {
-    let mut data = input.to_vec();
-    for (name, args) in stages {
-        let out = run(name, args, Some(&data));
-        assert!(
-            out.status.success(),
-            "{name} {args:?} failed: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        data = out.stdout;
-    }
-    data
 }
 
 fn check(data: &[u8]) -> serde_json::Value {

@@ -16,7 +16,7 @@
 //! leaves only patches with no defect, the user's pipeline leaves only
 //! patches, and ugrad lights both.
 
-use ugkit::{run, run_ok};
+use ugkit::{pipe, run, run_ok};
 
 /// A small deterministic generator (an LCG; the scene only needs to vary).
 struct Rng(u64);
@@ -34,6 +34,30 @@ impl Rng {
         a + (b - a) * self.unit()
     }
 }
+
+/// The corners of a room `w` × `d` × `h` standing at the origin.
+fn room_corners(w: f64, d: f64, h: f64) -> [[f64; 3]; 8] {
+    [
+        [0.0, 0.0, 0.0],
+        [w, 0.0, 0.0],
+        [w, d, 0.0],
+        [0.0, d, 0.0],
+        [0.0, 0.0, h],
+        [w, 0.0, h],
+        [w, d, h],
+        [0.0, d, h],
+    ]
+}
+
+/// The room's faces as corners of [`room_corners`], each facing in.
+const ROOM_FACES: [[usize; 4]; 6] = [
+    [0, 1, 2, 3],
+    [4, 7, 6, 5],
+    [0, 4, 5, 1],
+    [1, 5, 6, 2],
+    [2, 6, 7, 3],
+    [3, 7, 4, 0],
+];
 
 /// The MGF text of seed `seed`'s curved room (metres, z up, faces facing in).
 fn scene(seed: u64) -> String {
@@ -56,28 +80,12 @@ fn scene(seed: u64) -> String {
         }
     }
     let (w, d, h) = (rng.range(4.0, 5.0), rng.range(3.0, 4.0), 2.7);
-    let c: Vec<String> = [
-        [0.0, 0.0, 0.0],
-        [w, 0.0, 0.0],
-        [w, d, 0.0],
-        [0.0, d, 0.0],
-        [0.0, 0.0, h],
-        [w, 0.0, h],
-        [w, d, h],
-        [0.0, d, h],
-    ]
-    .into_iter()
-    .map(|p| v(&mut out, p))
-    .collect();
+    let c: Vec<String> = room_corners(w, d, h)
+        .into_iter()
+        .map(|p| v(&mut out, p))
+        .collect();
     out.push_str("m wall\n");
-    for q in [
-        [0, 1, 2, 3],
-        [4, 7, 6, 5],
-        [0, 4, 5, 1],
-        [1, 5, 6, 2],
-        [2, 6, 7, 3],
-        [3, 7, 4, 0],
-    ] {
+    for q in ROOM_FACES {
         out.push_str(&format!(
             "f {} {} {} {}\n",
             c[q[0]], c[q[1]], c[q[2]], c[q[3]]
@@ -139,21 +147,6 @@ fn scene(seed: u64) -> String {
         }
     }
     out
-}
-
-/// Runs the stages in order on `input`; every stage must succeed.
-fn pipe(input: &[u8], stages: &[(&str, &[&str])]) -> Vec<u8> {
-    let mut data = input.to_vec();
-    for (name, args) in stages {
-        let out = run(name, args, Some(&data));
-        assert!(
-            out.status.success(),
-            "{name} {args:?} failed: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        data = out.stdout;
-    }
-    data
 }
 
 fn report(data: &[u8]) -> serde_json::Value {
@@ -252,27 +245,11 @@ fn obj_scene(seed: u64) -> String {
         v.len()
     };
     let (w, d, h) = (6.0, 5.0, 3.0);
-    let c: Vec<usize> = [
-        [0.0, 0.0, 0.0],
-        [w, 0.0, 0.0],
-        [w, d, 0.0],
-        [0.0, d, 0.0],
-        [0.0, 0.0, h],
-        [w, 0.0, h],
-        [w, d, h],
-        [0.0, d, h],
-    ]
-    .into_iter()
-    .map(|p| vert(&mut v, p))
-    .collect();
-    for q in [
-        [0, 1, 2, 3],
-        [4, 7, 6, 5],
-        [0, 4, 5, 1],
-        [1, 5, 6, 2],
-        [2, 6, 7, 3],
-        [3, 7, 4, 0],
-    ] {
+    let c: Vec<usize> = room_corners(w, d, h)
+        .into_iter()
+        .map(|p| vert(&mut v, p))
+        .collect();
+    for q in ROOM_FACES {
         faces.push(("wall", q.iter().map(|&i| c[i]).collect()));
     }
     let lamp = [(2.5, 2.0), (2.5, 3.0), (3.5, 3.0), (3.5, 2.0)]

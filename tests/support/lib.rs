@@ -81,6 +81,22 @@ pub fn run_ok(name: &str, args: &[&str], stdin: Option<&[u8]>) -> String {
     String::from_utf8(out.stdout).expect("UTF-8 output")
 }
 
+/// Runs the stages in order, each on the previous one's output; every
+/// stage must succeed.
+pub fn pipe(input: &[u8], stages: &[(&str, &[&str])]) -> Vec<u8> {
+    let mut data = input.to_vec();
+    for (name, args) in stages {
+        let out = run(name, args, Some(&data));
+        assert!(
+            out.status.success(),
+            "{name} {args:?} failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        data = out.stdout;
+    }
+    data
+}
+
 /// The recommended cleaning chain and `ugcut -l LEN` on a model, each
 /// stage asserted to succeed: ugplanar | ugvlmerge | ugflip | ugisect |
 /// ugcopl | ugclean | ugcut.
