@@ -394,6 +394,21 @@ fn a_step_of_a_few_epsilon_gets_an_apex_straight_across() {
     );
 }
 
+/// A side bent by 0.66 epsilon, 21 epsilon from its corner, with the face's
+/// far side nearly in line (fixtures/cut/needle-on-a-bent-side.ug, from the
+/// CAD building of seed 9 at 8,600 faces): a needle that neither a flip
+/// nor a point inside its quadrilateral mends; its shortest side, on the
+/// boundary, gets a point straight across.
+#[test]
+fn a_needle_on_a_bent_side_gets_an_apex_straight_across() {
+    cuts_cleanly(
+        "cut/needle-on-a-bent-side.ug",
+        "4.367510572010628e-5",
+        &["0.8735021144021257", "0.7", "0.2", "2%"],
+        1e-9,
+    );
+}
+
 /// ugcut of the fixture at each length (with epsilon `eps`): only sound
 /// patches, no intersecting pair, the area of every material kept to `tol`
 /// (relative).

@@ -30,8 +30,9 @@
 //!    minimum angle `angle`, area at most 0.6·len²) with boundary segments and
 //!    cell edges kept whole; needles (a corner within epsilon of the
 //!    opposite side) are flipped away or split by a point inside, and one
-//!    left on a boundary edge shorter than 2 epsilon (a jog) gets a point
-//!    straight across that edge, and the triangulation is read again; then
+//!    left on a boundary edge shorter than 8 epsilon (a jog), or whose
+//!    shortest side is a boundary edge, gets a point straight across that
+//!    edge, and the triangulation is read again; then
 //!    pairs of triangles that form a well-shaped convex quadrilateral are
 //!    joined.
 //!
@@ -1267,7 +1268,8 @@ fn cell_ok(
 /// [`jog_points`]). 2 until placed seed 3871: a step of 4 epsilon in a
 /// strip's side had the strip's far corner as its Delaunay apex (a needle,
 /// with the next vertex up the side 0.5 epsilon from it). Only needles on
-/// such edges get a point, so faces without one mesh as before.
+/// such edges (and needles whose shortest side is a boundary edge) get a
+/// point, so faces without a needle mesh as before.
 const JOG: f64 = 8.0;
 
 /// Points for the jogs of a face's boundary: an edge shorter than
@@ -1304,9 +1306,11 @@ fn jog_points(
         })
         .map(|(a, b)| (a.min(b), a.max(b)))
         .collect();
-    if short.is_empty() {
-        return out;
-    }
+    let boundary: FxHashSet<(VertexId, VertexId)> = bcontours
+        .iter()
+        .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
+        .map(|(a, b)| (a.min(b), a.max(b)))
+        .collect();
     let pos = |v: VertexId| {
         if v.0 > u32::MAX - 1_000_000 && ((u32::MAX - v.0) as usize) < steiner.len() {
             steiner[(u32::MAX - v.0) as usize]
@@ -1345,9 +1349,22 @@ fn jog_points(
         if width(p, eps) > eps {
             continue;
         }
+        // A needle's shortest side, when it is a boundary edge, is treated
+        // as a jog too, however long: a contour vertex within epsilon of the
+        // line through its neighbours, with the face's far side nearly in
+        // line as well, leaves a needle that no flip or point inside its
+        // quadrilateral mends (CAD building 8600 seed 9: a rug's edge 85
+        // epsilon from a tile hole's side that bends by 0.66 epsilon).
+        let shortest = (0..3)
+            .min_by(|&i, &j| {
+                let l = |k: usize| (p[(k + 1) % 3] - p[k]).length();
+                l(i).total_cmp(&l(j))
+            })
+            .unwrap_or(0);
         for i in 0..3 {
             let (a, b) = (t[i], t[(i + 1) % 3]);
-            if !short.contains(&(a.min(b), a.max(b))) {
+            let edge = (a.min(b), a.max(b));
+            if !(short.contains(&edge) || (i == shortest && boundary.contains(&edge))) {
                 continue;
             }
             let (pa, pb, po) = (p[i], p[(i + 1) % 3], p[(i + 2) % 3]);
