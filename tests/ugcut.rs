@@ -409,6 +409,38 @@ fn a_needle_on_a_bent_side_gets_an_apex_straight_across() {
     );
 }
 
+/// A tent on a tile's side: a vertex 0.75 epsilon above the chord between
+/// its neighbours, 1.7 epsilon apart (fixtures/cut/tent-on-a-tile-side.ug,
+/// from the CAD building of seed 2 at 30,000 faces). Every triangle taking
+/// the tip with a neighbour is narrower than epsilon: the tip joins the
+/// nearer neighbour before meshing. It moves 1.1 epsilon, as a weld may:
+/// the desk's feet, 0.69 m high, stand on it, and their wood gains
+/// 1.5e-5 of its area (the tiles' changes by the tent, 0.6 ε²).
+#[test]
+fn a_tent_on_a_side_joins_its_nearer_neighbour() {
+    cuts_cleanly(
+        "cut/tent-on-a-tile-side.ug",
+        "6.257041912590766e-5",
+        &["1.2514083825181532", "0.7", "0.2", "2%"],
+        2e-5,
+    );
+}
+
+/// A floor's corner with a wall's foot cut 1.3 epsilon either side of it
+/// (fixtures/cut/corner-cut-by-a-wall-foot.ug, from the user's pipeline on
+/// the 100,000-face CAD building): the corner's triangle has an area under
+/// ε², so the corner joins its nearer neighbour (the face loses that
+/// triangle, 1.35e-7 of its area).
+#[test]
+fn a_corner_of_area_under_epsilon_squared_joins_its_nearer_neighbour() {
+    cuts_cleanly(
+        "cut/corner-cut-by-a-wall-foot.ug",
+        "1.0854698910232396e-4",
+        &["2", "0.7", "0.2", "2%"],
+        2e-7,
+    );
+}
+
 /// ugcut of the fixture at each length (with epsilon `eps`): only sound
 /// patches, no intersecting pair, the area of every material kept to `tol`
 /// (relative).

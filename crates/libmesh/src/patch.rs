@@ -156,6 +156,17 @@ pub fn prepare(m: &Model, eps: f64, stats: &mut Stats) -> Model {
         .dropped
         .extend(dropped.into_iter().map(|(f, why)| (label(f), why)));
     stats.tvertices = winged::weld::split_edges(&mut mesh, eps).inserted;
+    // Tents (a vertex within epsilon of the short chord between its
+    // neighbours) cannot be meshed without a sliver: the vertex joins the
+    // nearer neighbour, and the edges that changed are split again.
+    let (tents, dropped) = winged::weld::collapse_tents(&mut mesh, eps);
+    if tents > 0 {
+        stats.welded += tents;
+        stats
+            .dropped
+            .extend(dropped.into_iter().map(|(f, why)| (label(f), why)));
+        stats.tvertices += winged::weld::split_edges(&mut mesh, eps).inserted;
+    }
     let faces: Vec<FaceId> = mesh.faces().collect();
     for f in faces {
         let name = mesh

@@ -1225,3 +1225,27 @@ fn faces_and_vertices_outside_the_statements() {
         "v a 0 0 0;\nv b 1 0 0;\nv c 1 1 0;\nv d 0 1 0;\nf t (a b c);\n"
     );
 }
+
+/// A tent (a vertex 0.75 above the chord between its neighbours, which
+/// are 1.7 apart, epsilon 1) joins the nearer neighbour in every face that
+/// uses it; a vertex as far off a long chord stays.
+#[test]
+fn tents_join_the_nearer_neighbour() {
+    let mut m = mesh(
+        "v a 0 0 0; v b 1000 0 0; v u 600 0 0; v t 600.8 0.75 0; v w 601.7 0 0; \
+         v c 1000 1000 0; v d 0 1000 0; v k 300 -0.5 0; v x 600.9 500 0; \
+         v y 700 500 0; f A (a k u t w b c d); f B (u x t); f C (t x y w);",
+    );
+    let (n, dropped) = crate::weld::collapse_tents(&mut m, 1.0);
+    ok(&m);
+    assert_eq!(n, 1);
+    // t is 1.10 from u and 1.17 from w: it joins u, and B (u x t) is left
+    // without area.
+    assert_eq!(dropped.len(), 1, "{dropped:?}");
+    assert_eq!(dropped[0].0, f(&m, "B"));
+    assert_eq!(contours(&m, f(&m, "A")), ["a k u w b c d"]);
+    assert_eq!(contours(&m, f(&m, "C")), ["u x y w"]);
+    // k is 0.5 off the chord a–u, but that chord is 600 long: no tent.
+    let (n, _) = crate::weld::collapse_tents(&mut m, 1.0);
+    assert_eq!(n, 0);
+}
