@@ -1308,20 +1308,6 @@ fn jog_points(
     if eps.is_nan() || eps <= 0.0 {
         return out;
     }
-    let short: FxHashSet<(VertexId, VertexId)> = bcontours
-        .iter()
-        .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
-        .filter(|&(a, b)| {
-            let l = (at(b) - at(a)).length();
-            l > 0.0 && l < JOG * eps
-        })
-        .map(|(a, b)| (a.min(b), a.max(b)))
-        .collect();
-    let boundary: FxHashSet<(VertexId, VertexId)> = bcontours
-        .iter()
-        .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
-        .map(|(a, b)| (a.min(b), a.max(b)))
-        .collect();
     let pos = |v: VertexId| {
         if v.0 > u32::MAX - 1_000_000 && ((u32::MAX - v.0) as usize) < steiner.len() {
             steiner[(u32::MAX - v.0) as usize]
@@ -1329,6 +1315,24 @@ fn jog_points(
             at(v)
         }
     };
+    // The needles left; a face without one meshes as it is.
+    let needles: Vec<([VertexId; 3], [DVec2; 3])> = tris
+        .iter()
+        .map(|t| (*t, t.map(pos)))
+        .filter(|&(_, p)| width(p, eps) <= eps)
+        .collect();
+    if needles.is_empty() {
+        return out;
+    }
+    // Boundary edges (lower vertex first) and whether each is a jog.
+    let boundary: FxHashMap<(VertexId, VertexId), bool> = bcontours
+        .iter()
+        .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
+        .map(|(a, b)| {
+            let l = (at(b) - at(a)).length();
+            ((a.min(b), a.max(b)), l > 0.0 && l < JOG * eps)
+        })
+        .collect();
     // The distance from q to the boundary but segment `skip`.
     let clearance = |q: DVec2, skip: (DVec2, DVec2)| {
         let r = 64.0 * eps;
@@ -1355,11 +1359,7 @@ fn jog_points(
             % 2
             == 1
     };
-    for t in tris {
-        let p = t.map(pos);
-        if width(p, eps) > eps {
-            continue;
-        }
+    for (t, p) in needles {
         // A needle's shortest side, when it is a boundary edge, is treated
         // as a jog too, however long: a contour vertex within epsilon of the
         // line through its neighbours, with the face's far side nearly in
@@ -1375,7 +1375,10 @@ fn jog_points(
         for i in 0..3 {
             let (a, b) = (t[i], t[(i + 1) % 3]);
             let edge = (a.min(b), a.max(b));
-            if !(short.contains(&edge) || (i == shortest && boundary.contains(&edge))) {
+            let Some(&jog) = boundary.get(&edge) else {
+                continue;
+            };
+            if !(jog || i == shortest) {
                 continue;
             }
             let (pa, pb, po) = (p[i], p[(i + 1) % 3], p[(i + 2) % 3]);
