@@ -406,7 +406,14 @@ pub fn cut_segments(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Vec<(DVec3, DVec3)>
             continue;
         }
         let lb = b.locate(s, eps);
-        if lb == Location::Outside || (la == Location::Boundary && lb == Location::Boundary) {
+        if lb == Location::Outside {
+            continue;
+        }
+        // Within epsilon of both boundaries along its middle: a cut only
+        // if one of its ends lies inside a face (a short stretch, under
+        // 2 epsilon, from one face's edge to the other's corner just
+        // inside it: the pair intersects there, as `relate` finds).
+        if la == Location::Boundary && lb == Location::Boundary && !(meets(w[0]) || meets(w[1])) {
             continue;
         }
         match out.last_mut() {
