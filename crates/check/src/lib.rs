@@ -537,23 +537,14 @@ fn face_checks(cx: &Ctx<'_>, f: FaceId) -> FaceFindings {
             None,
         );
     }
-    // Planarity against the best-fit plane of all contours' outer normal.
-    let plane = Plane::fit(&pts[0]);
-    let mut np = None;
-    if let Some(pl) = plane {
-        let dev = pts
-            .iter()
-            .flatten()
-            .map(|&p| pl.dist(p).abs())
-            .fold(0.0, f64::max);
-        if dev > eps {
-            np = Some(NonPlanar {
-                face: label.clone(),
-                deviation: dev,
-                relative: dev / size,
-            });
-        }
-    }
+    // Planarity against the face's best-fit plane (the tools' measure).
+    let np = Plane::face_deviation(&pts)
+        .filter(|&(dev, _)| dev > eps)
+        .map(|(dev, _)| NonPlanar {
+            face: label.clone(),
+            deviation: dev,
+            relative: dev / size,
+        });
     // Patch shape.
     let outer = &face.contours[0];
     let patch = if face.contours.len() > 1 {

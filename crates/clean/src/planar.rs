@@ -20,7 +20,7 @@
 //! statements pass through unchanged.
 
 use geom::triangulate::fold_triangles;
-use geom::{DVec3, Plane, newell_normal};
+use geom::{DVec3, Plane};
 use rustc_hash::FxHashSet;
 use ug::{Face, FaceId, Item, Model, VertexId};
 
@@ -39,18 +39,12 @@ pub struct Stats {
 
 /// Largest distance of a face's vertices from its best-fit plane, and that plane.
 pub fn deviation(m: &Model, f: &Face) -> Option<(f64, Plane)> {
-    let outer: Vec<DVec3> = f.contours.first()?.iter().map(|&v| m.pos(v)).collect();
-    let n = newell_normal(&outer);
-    let len = n.length();
-    if len == 0.0 || !len.is_finite() {
-        return None;
-    }
-    let n = n / len;
-    let all: Vec<DVec3> = f.contours.iter().flatten().map(|&v| m.pos(v)).collect();
-    let c = all.iter().copied().sum::<DVec3>() / all.len() as f64;
-    let plane = Plane { n, d: n.dot(c) };
-    let dev = all.iter().map(|&p| plane.dist(p).abs()).fold(0.0, f64::max);
-    Some((dev, plane))
+    let pts: Vec<Vec<DVec3>> = f
+        .contours
+        .iter()
+        .map(|c| c.iter().map(|&v| m.pos(v)).collect())
+        .collect();
+    Plane::face_deviation(&pts)
 }
 
 /// Triangles for a non-planar face, as vertex triples in the face's orientation

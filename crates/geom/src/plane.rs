@@ -96,6 +96,30 @@ impl Plane {
         Some(Plane { n, d: n.dot(c) })
     }
 
+    /// A face's planarity: its best-fit plane (the outer contour's normal,
+    /// as [`Plane::fit`], through the centroid of all its contours' points)
+    /// and the largest distance of any of the points from it. The one
+    /// measure of every tool and of `ugcheck`, so that a face a tool passes
+    /// on as planar is planar to the check.
+    pub fn face_deviation(contours: &[Vec<DVec3>]) -> Option<(f64, Plane)> {
+        let outer = contours.first()?;
+        let n = contour_normal(outer);
+        let len = n.length();
+        if len.is_nan() || len <= 0.0 || outer.is_empty() {
+            return None;
+        }
+        let n = n / len;
+        let count: usize = contours.iter().map(Vec::len).sum();
+        let c = contours.iter().flatten().copied().sum::<DVec3>() / count as f64;
+        let plane = Plane { n, d: n.dot(c) };
+        let dev = contours
+            .iter()
+            .flatten()
+            .map(|&p| plane.dist(p).abs())
+            .fold(0.0, f64::max);
+        Some((dev, plane))
+    }
+
     /// Signed distance of a point from the plane (positive on the normal's side).
     pub fn dist(&self, p: DVec3) -> f64 {
         self.n.dot(p) - self.d

@@ -176,12 +176,7 @@ pub fn prepare(m: &Model, eps: f64, stats: &mut Stats) -> Model {
             .unwrap_or_else(|| format!("f{}", f.0 + 1));
         // Not planar: the triangles ugplanar would make.
         let pts = mesh.face_points(f);
-        let off = Plane::fit(&pts[0]).map_or(0.0, |pl| {
-            pts.iter()
-                .flatten()
-                .map(|&p| pl.dist(p).abs())
-                .fold(0.0, f64::max)
-        });
+        let off = Plane::face_deviation(&pts).map_or(0.0, |(d, _)| d);
         if off > eps
             && let Some(tris) = geom::triangulate::fold_triangles(&pts)
         {
