@@ -96,6 +96,33 @@ fn a_corner_just_inside_a_face_by_its_edge_is_cut_round() {
     );
 }
 
+/// A rug's piece on a tile's, overlapping on a triangle with their planes
+/// tilted apart by jitter (fixtures/isect/rug-tilted-on-a-tile.ug, from
+/// the 100,000-face CAD building): ugcheck classes them as crossing, but
+/// for nearly parallel faces the line where the planes meet is rounding,
+/// so ugisect leaves them as they are (it once cut them in every round);
+/// ugcopl and ugclean then leave no defect.
+#[test]
+fn nearly_parallel_faces_are_left_to_ugcopl() {
+    let src = std::fs::read_to_string(fixture("isect/rug-tilted-on-a-tile.ug")).unwrap();
+    let eps = ["-e", "1.0854698910232396e-4"];
+    assert_eq!(count(&check_eps(&src, &eps), "intersecting"), 1);
+    let out = run_ok("ugisect", &eps, Some(src.as_bytes()));
+    assert_eq!(out, run_ok("ugcat", &[], Some(src.as_bytes())));
+    let copl = run_ok("ugcopl", &eps, Some(out.as_bytes()));
+    let clean = run_ok("ugclean", &eps, Some(copl.as_bytes()));
+    let r = check_eps(&clean, &eps);
+    for key in [
+        "intersecting",
+        "overlapping",
+        "coincident",
+        "degenerate",
+        "tvertices",
+    ] {
+        assert_eq!(count(&r, key), 0, "{key} after the chain:\n{clean}");
+    }
+}
+
 #[test]
 fn the_floor_is_cut_along_the_walls_foot() {
     let src = std::fs::read_to_string(fixture("check/wall-on-floor.ug")).unwrap();
