@@ -441,6 +441,24 @@ fn a_corner_of_area_under_epsilon_squared_joins_its_nearer_neighbour() {
     );
 }
 
+/// A column's strip 9.3 epsilon high whose foot has two vertices 1.0017
+/// epsilon apart (fixtures/cut/short-foot-of-a-column-strip.ug, from the
+/// user's pipeline on the CAD building of 8,600 faces, seed 10): no
+/// triangle on that edge can be wider than epsilon inside the strip (its
+/// apex would have to be 17 epsilon across), so its straighter end joins
+/// the other and the model is meshed again. The end moves 1 epsilon, as a
+/// weld may: the column's fold triangles below it, 2.8 m tall, change
+/// area by that times their height over two (1.7e-5 of the column's).
+#[test]
+fn a_short_edge_no_triangle_can_take_has_its_ends_joined() {
+    cuts_cleanly(
+        "cut/short-foot-of-a-column-strip.ug",
+        "4.463525145085003e-5",
+        &["2", "0.7", "0.2", "2%"],
+        2e-5,
+    );
+}
+
 /// ugcut of the fixture at each length (with epsilon `eps`): only sound
 /// patches, no intersecting pair, the area of every material kept to `tol`
 /// (relative).

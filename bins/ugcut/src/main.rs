@@ -120,8 +120,9 @@ fn main() -> std::process::ExitCode {
             report(&st, c.verbose > 0);
         }
         c.verbose(format!(
-            "welded {} vertices, inserted {} T-vertices; repaired {} faces, folded {} non-planar, left out {}",
+            "welded {} vertices, joined the ends of {} short edges, inserted {} T-vertices; repaired {} faces, folded {} non-planar, left out {}",
             st.welded,
+            st.joined,
             st.tvertices,
             st.repaired.len(),
             st.tessellated.len(),

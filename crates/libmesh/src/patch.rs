@@ -77,6 +77,9 @@ pub struct Stats {
     pub worst_angle: f64,
     /// Vertices welded into an earlier one within epsilon.
     pub welded: usize,
+    /// Boundary edges a little longer than epsilon on which no triangle
+    /// could be wider than epsilon, their ends joined (see [`cut`]).
+    pub joined: usize,
     /// T-vertices inserted into edges.
     pub tvertices: usize,
     /// Non-planar faces folded into triangles first.
@@ -135,6 +138,17 @@ pub fn mesh_frame(pts: &[Vec<DVec3>]) -> Option<Frame> {
 /// contours in its plane (see the module documentation) and drops faces
 /// without area, recording each in `stats`.
 pub fn prepare(m: &Model, eps: f64, stats: &mut Stats) -> Model {
+    prepare_joining(m, eps, stats, &[])
+}
+
+/// [`prepare`], first joining each pair `(from, to)` of `joins` (vertices
+/// of `m`) as [`winged::weld::join_vertices`] does.
+fn prepare_joining(
+    m: &Model,
+    eps: f64,
+    stats: &mut Stats,
+    joins: &[(VertexId, VertexId)],
+) -> Model {
     let labels = labels(m);
     let label = |f: FaceId| {
         labels
@@ -150,12 +164,19 @@ pub fn prepare(m: &Model, eps: f64, stats: &mut Stats) -> Model {
                 .push((label(*face), "fewer than 3 distinct vertices".into()));
         }
     }
+    if !joins.is_empty() {
+        let (joined, dropped) = winged::weld::join_vertices(&mut mesh, joins, eps);
+        stats.joined += joined;
+        stats
+            .dropped
+            .extend(dropped.into_iter().map(|(f, why)| (label(f), why)));
+    }
     let (welded, dropped) = winged::weld::merge_vertices(&mut mesh, eps);
-    stats.welded = welded;
+    stats.welded += welded;
     stats
         .dropped
         .extend(dropped.into_iter().map(|(f, why)| (label(f), why)));
-    stats.tvertices = winged::weld::split_edges(&mut mesh, eps).inserted;
+    stats.tvertices += winged::weld::split_edges(&mut mesh, eps).inserted;
     // Tents (a vertex within epsilon of the short chord between its
     // neighbours) cannot be meshed without a sliver: the vertex joins the
     // nearer neighbour, and the edges that changed are split again.
@@ -398,6 +419,8 @@ struct Ctx<'m> {
     vnames: FxHashSet<String>,
     fnames: FxHashSet<String>,
     div: Divisions,
+    /// Joins asked for by [`jog_points`]: (from, to), vertices of `m`.
+    stuck: Vec<(VertexId, VertexId)>,
 }
 
 impl Ctx<'_> {
@@ -515,7 +538,27 @@ pub fn cut(m: &Model, opts: Options) -> Result<(Model, Stats), String> {
         ..Stats::default()
     };
     let prepared = prepare(m, opts.eps, &mut stats);
-    let m = &prepared;
+    let (out, done, stuck) = mesh_all(&prepared, opts, stats.clone())?;
+    if stuck.is_empty() {
+        return Ok((out, done));
+    }
+    // A boundary edge a little longer than epsilon that no triangle can
+    // take without being narrower than epsilon (its face is too narrow
+    // there for an apex far enough across): its ends are joined, as a
+    // weld would, and the model meshed again (CAD building 8600 seed 10,
+    // the user's pipeline: a column's strip 9.3 epsilon high whose foot
+    // has two vertices 1.0017 epsilon apart, cut points of the slab at
+    // the column's two faces).
+    let again = prepare_joining(&prepared, opts.eps, &mut stats, &stuck);
+    let (out, done, _) = mesh_all(&again, opts, stats)?;
+    Ok((out, done))
+}
+
+/// Vertex joins, (from, to).
+type Joins = Vec<(VertexId, VertexId)>;
+
+/// The meshing of a prepared model; also the joins [`jog_points`] asked for.
+fn mesh_all(m: &Model, opts: Options, mut stats: Stats) -> Result<(Model, Stats, Joins), String> {
     let mut cx = Ctx {
         m,
         opts,
@@ -537,6 +580,7 @@ pub fn cut(m: &Model, opts: Options) -> Result<(Model, Stats), String> {
                 ends,
             }
         },
+        stuck: Vec::new(),
     };
     let mut out = Model {
         materials: m.materials.clone(),
@@ -673,7 +717,10 @@ pub fn cut(m: &Model, opts: Options) -> Result<(Model, Stats), String> {
     if edge_count == 0 {
         stats.min_edge = 0.0;
     }
-    Ok((out, stats))
+    let mut stuck = cx.stuck;
+    stuck.sort_unstable();
+    stuck.dedup();
+    Ok((out, stats, stuck))
 }
 
 /// Writes vertex statements for the vertices created since the last call.
@@ -1002,7 +1049,14 @@ fn mesh_face(
         let steiner = remove_slivers(&mut tris, &fixed, &at, eps);
         if !jogs_done {
             jogs_done = true;
-            let jogs = jog_points(&tris, &steiner, &at, &bcontours, &segs, &seg_index, eps);
+            let (jogs, stuck) =
+                jog_points(&tris, &steiner, &at, &bcontours, &segs, &seg_index, eps);
+            let known = cx.m.vertices.len();
+            cx.stuck.extend(
+                stuck
+                    .into_iter()
+                    .filter(|(a, b)| a.idx() < known && b.idx() < known),
+            );
             if !jogs.is_empty() {
                 for q in jogs {
                     cdt.insert(Point2::new(q.x, q.y)).ok()?;
@@ -1298,10 +1352,11 @@ fn jog_points(
     segs: &[(DVec2, DVec2)],
     seg_index: &BoxIndex,
     eps: f64,
-) -> Vec<DVec2> {
+) -> (Vec<DVec2>, Vec<(VertexId, VertexId)>) {
     let mut out: Vec<DVec2> = Vec::new();
+    let mut stuck: Vec<(VertexId, VertexId)> = Vec::new();
     if eps.is_nan() || eps <= 0.0 {
-        return out;
+        return (out, stuck);
     }
     let pos = |v: VertexId| {
         if v.0 > u32::MAX - 1_000_000 && ((u32::MAX - v.0) as usize) < steiner.len() {
@@ -1317,7 +1372,7 @@ fn jog_points(
         .filter(|&(_, p)| width(p, eps) <= eps)
         .collect();
     if needles.is_empty() {
-        return out;
+        return (out, stuck);
     }
     // Boundary edges (lower vertex first) and whether each is a jog.
     let boundary: FxHashMap<(VertexId, VertexId), bool> = bcontours
@@ -1396,15 +1451,67 @@ fn jog_points(
                     }
                 }
             }
-            if let Some((score, q)) = best
-                && score > eps
-                && out.iter().all(|o| o.distance(q) > 2.0 * eps)
-            {
-                out.push(q);
+            match best {
+                Some((score, q))
+                    if score > eps && out.iter().all(|o| o.distance(q) > 2.0 * eps) =>
+                {
+                    out.push(q);
+                }
+                Some((score, _)) if score > eps => {}
+                // No apex across an edge under 2 epsilon is wider than
+                // epsilon: the face is too narrow there. Its straighter end
+                // (the one nearer the line through its other neighbour and
+                // the far end) joins the other.
+                _ if l < JOIN * eps => {
+                    if let Some(j) = join_of(a, b, bcontours, at) {
+                        stuck.push(j);
+                    }
+                }
+                _ => {}
             }
         }
     }
-    out
+    (out, stuck)
+}
+
+/// Boundary edges shorter than this many epsilons whose needle no point
+/// mends have their ends joined (see [`jog_points`]); as for tents, the
+/// vertex moves by under 2 epsilon.
+const JOIN: f64 = 2.0;
+
+/// For the boundary edge (a, b): (the straighter end, the other). An end's
+/// straightness: its distance from the line through its other contour
+/// neighbour and the edge's far end. The higher vertex id moves on a tie.
+fn join_of(
+    a: VertexId,
+    b: VertexId,
+    bcontours: &[Vec<VertexId>],
+    at: &dyn Fn(VertexId) -> DVec2,
+) -> Option<(VertexId, VertexId)> {
+    for c in bcontours {
+        let n = c.len();
+        for i in 0..n {
+            let (x, y) = (c[i], c[(i + 1) % n]);
+            if !((x == a && y == b) || (x == b && y == a)) {
+                continue;
+            }
+            let before = c[(i + n - 1) % n];
+            let after = c[(i + 2) % n];
+            let off = |v: VertexId, other: VertexId, far: VertexId| {
+                geom::point_segment_distance(
+                    at(v).extend(0.0),
+                    at(other).extend(0.0),
+                    at(far).extend(0.0),
+                )
+                .0
+            };
+            // x's other neighbour is `before`, y's is `after`.
+            let (dx, dy) = (off(x, before, y), off(y, after, x));
+            let x_moves = dx < dy || (dx == dy && x > y);
+            return Some(if x_moves { (x, y) } else { (y, x) });
+        }
+    }
+    None
 }
 
 /// How wide a triangle is, as the sliver tests measure it against

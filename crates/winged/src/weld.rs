@@ -321,6 +321,41 @@ pub fn collapse_tents(mesh: &mut Mesh, eps: f64) -> (usize, Vec<(FaceId, String)
     (replaced, dropped)
 }
 
+/// Joins vertex `from` to vertex `to` for each pair of `joins`, in every
+/// face and wire, as [`collapse_tents`] does (a pair whose vertices an
+/// earlier pair moved or kept is skipped). For the patch mesher: the ends
+/// of a boundary edge a little longer than epsilon on which no triangle
+/// is wider than epsilon. Returns the number of vertices joined and the
+/// faces dropped as in [`merge_vertices`].
+pub fn join_vertices(
+    mesh: &mut Mesh,
+    joins: &[(VertexId, VertexId)],
+    eps: f64,
+) -> (usize, Vec<(FaceId, String)>) {
+    let order: Vec<VertexId> = mesh.vertices().collect();
+    let nv = mesh.model().vertices.len();
+    let mut rep: Vec<VertexId> = (0..nv as u32).map(VertexId).collect();
+    let mut touched = vec![false; nv];
+    let mut joined = 0;
+    for &(from, to) in joins {
+        if from == to || from.idx() >= nv || to.idx() >= nv {
+            continue;
+        }
+        if touched[from.idx()] || touched[to.idx()] {
+            continue;
+        }
+        rep[from.idx()] = to;
+        touched[from.idx()] = true;
+        touched[to.idx()] = true;
+        joined += 1;
+    }
+    if joined == 0 {
+        return (0, Vec::new());
+    }
+    let dropped = apply_merges(mesh, &order, &rep, true, eps);
+    (joined, dropped)
+}
+
 /// Distinct vertices of a contour once consecutive repeats are removed.
 fn distinct_after_cleaning(c: &[VertexId]) -> usize {
     let mut d: Vec<VertexId> = c.to_vec();
