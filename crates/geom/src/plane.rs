@@ -102,13 +102,7 @@ impl Plane {
     /// measure of every tool and of `ugcheck`, so that a face a tool passes
     /// on as planar is planar to the check.
     pub fn face_deviation(contours: &[Vec<DVec3>]) -> Option<(f64, Plane)> {
-        let outer = contours.first()?;
-        let n = contour_normal(outer);
-        let len = n.length();
-        if len.is_nan() || len <= 0.0 || outer.is_empty() {
-            return None;
-        }
-        let n = n / len;
+        let n = Plane::fit(contours.first()?)?.n;
         let count: usize = contours.iter().map(Vec::len).sum();
         let c = contours.iter().flatten().copied().sum::<DVec3>() / count as f64;
         let plane = Plane { n, d: n.dot(c) };

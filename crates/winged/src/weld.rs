@@ -269,9 +269,8 @@ pub fn collapse_tents(mesh: &mut Mesh, eps: f64) -> (usize, Vec<(FaceId, String)
         for (k, &v) in order.iter().enumerate() {
             rank[v.idx()] = k as u32;
         }
-        let mut rep: Vec<VertexId> = (0..nv as u32).map(VertexId).collect();
+        let mut joins: Vec<(VertexId, VertexId)> = Vec::new();
         let mut touched = vec![false; nv];
-        let mut found = 0;
         let faces: Vec<FaceId> = mesh.faces().collect();
         for f in faces {
             for c in &mesh.face(f).contours {
@@ -304,19 +303,20 @@ pub fn collapse_tents(mesh: &mut Mesh, eps: f64) -> (usize, Vec<(FaceId, String)
                     } else {
                         w
                     };
-                    rep[v.idx()] = to;
+                    joins.push((v, to));
                     for x in [u, v, w] {
                         touched[x.idx()] = true;
                     }
-                    found += 1;
                 }
             }
         }
-        if found == 0 {
+        if joins.is_empty() {
             break;
         }
-        replaced += found;
-        dropped.extend(apply_merges(mesh, &order, &rep, true, eps));
+        // Tents touch none of each other's vertices: every join is made.
+        let (joined, d) = join_vertices(mesh, &joins, eps);
+        replaced += joined;
+        dropped.extend(d);
     }
     (replaced, dropped)
 }
