@@ -153,15 +153,18 @@ fn the_tail_gives_e_over_one_minus_rho_in_a_closed_enclosure() {
 }
 
 /// Against progressive shooting to 1e-4, in a room lit by a ceiling panel
-/// with a block on the floor (13 surfaces, 1,257 patch corners): the tail
-/// starts right after the lamp has shot (tail fraction 1), so it carries
-/// all of the reflected light. Measured per surface, area-weighted mean
-/// radiosity: walls, floor and ceiling within 0.9%, the block's sides
-/// within 5% (reflected light at patch resolution), whether every patch is
-/// tried or 256 rays find them; 64 rays miss 6–8%.
+/// with a block on the floor (13 surfaces, 688 patch corners at 0.35): the
+/// tail starts right after the lamp has shot (tail fraction 1), so it
+/// carries all of the reflected light. Measured per surface, area-weighted
+/// mean radiosity: walls, floor and ceiling within 0.9%, the block's sides
+/// within 2.3% (reflected light at patch resolution), whether every patch
+/// is tried or 256 rays find them; 16 rays miss 6–7%. (Patches of 0.25,
+/// 1,257 corners, measured 0.95% and 2.0%, but the reference's 8,500
+/// shots took CI over a minute; at 0.5 the tail's patches are too coarse
+/// for the room's 1%: 3.0%.)
 #[test]
 fn the_tail_agrees_with_shooting_to_the_end_in_a_lit_room() {
-    let model = patches(&room(), 0.25);
+    let model = patches(&room(), 0.35);
     let base = Options {
         converge: 1e-4,
         ..Options::default()
@@ -171,13 +174,13 @@ fn the_tail_agrees_with_shooting_to_the_end_in_a_lit_room() {
         Options {
             tail: 0.0,
             // §6's mean for new vertices, as when the figures were measured
-            // (the re-shot costs this 5,000-shot debug run a quarter minute).
+            // (the re-shot would cost this 5,000-shot run a quarter minute).
             regather: false,
             ..base.clone()
         },
     );
     assert!(exact.tail.is_none());
-    assert!(exact.shots.len() > 5000, "{}", exact.shots.len());
+    assert!(exact.shots.len() > 4000, "{}", exact.shots.len());
     let want = surface_means(&exact);
     // Surfaces: the lamp, the room's six faces, the block's six (one on the floor, dark).
     assert_eq!(want.len(), 13);
@@ -207,12 +210,12 @@ fn the_tail_agrees_with_shooting_to_the_end_in_a_lit_room() {
         errors.push((room, all));
     }
     // Every patch tried.
-    assert!(errors[0].0 < 0.012 && errors[0].1 < 0.07, "{errors:?}");
+    assert!(errors[0].0 < 0.012 && errors[0].1 < 0.04, "{errors:?}");
     // 256 rays: about the same.
-    assert!(errors[1].0 < 0.012 && errors[1].1 < 0.07, "{errors:?}");
+    assert!(errors[1].0 < 0.012 && errors[1].1 < 0.04, "{errors:?}");
     // Far fewer rays miss more: the test can tell. (At 64 rays the room
     // was within 1%: the corners try what the patch centres around them
-    // found; at 16 it is 19% off.)
+    // found; at 16 it is 6–8% off.)
     assert!(errors[2].0 > errors[1].0 + 0.01, "{errors:?}");
 }
 
