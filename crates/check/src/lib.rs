@@ -607,6 +607,12 @@ fn shape_defect(cx: &Ctx<'_>, face: &ug::Face, pts: &[Vec<DVec3>], eps: f64) -> 
         .zip(&g.contours_2d)
         .flat_map(|(c, c2)| c.iter().copied().zip(c2.iter().copied()))
         .collect();
+    let pos3: std::collections::HashMap<VertexId, DVec3> = face
+        .contours
+        .iter()
+        .zip(pts)
+        .flat_map(|(c, c3)| c.iter().copied().zip(c3.iter().copied()))
+        .collect();
     verts.sort_by_key(|v| v.0);
     verts.dedup_by_key(|v| v.0);
     let index = (edges.len() > 24).then(|| {
@@ -650,11 +656,13 @@ fn shape_defect(cx: &Ctx<'_>, face: &ug::Face, pts: &[Vec<DVec3>], eps: f64) -> 
     }
     for &(v, p) in &verts {
         for k in near(p - DVec2::splat(eps), p + DVec2::splat(eps)) {
-            let (ev, a, b) = edges[k];
+            let (ev, _, _) = edges[k];
             if ev.contains(&v) {
                 continue;
             }
-            let d = point_segment_distance(p.extend(0.0), a.extend(0.0), b.extend(0.0)).0;
+            // In space, as the weld and the T-vertex test measure (the
+            // plane's frame can bring a pair kept apart a hair closer).
+            let d = point_segment_distance(pos3[&v], pos3[&ev[0]], pos3[&ev[1]]).0;
             if d <= eps {
                 return Some(format!(
                     "narrower than epsilon: vertex {} lies {} from edge {}-{}",
