@@ -498,3 +498,109 @@ fn every_tool_alone_makes_bad_faces_sound() {
         }
     }
 }
+
+/// A twisted quadrilateral exported twice as triangles along different
+/// diagonals (a flipped duplicate fanned from its first vertex, as an OBJ
+/// export does) is four faces of a thin tetrahedron, each pair folded onto
+/// the other at about 2°. The grouper gives the later copy the earlier
+/// copy's diagonal, so the chain resolves the duplicate as it does a
+/// duplicated quad. Before, ugisect cut slivers along the folds for four
+/// rounds and the chain ended with 4 intersecting pairs (11 defects after
+/// ugcut).
+#[test]
+fn a_twisted_quad_triangulated_twice_gets_one_diagonal() {
+    let p = path("vlmerge/twisted-side-triangulated-twice.ug");
+    let src = std::fs::read_to_string(&p).unwrap();
+    let before = check(&src, None);
+    let eps = before["epsilon"].as_f64().unwrap();
+    let out = run("ugvlmerge", &["-v", &p], None);
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("2 triangles of twisted quads triangulated twice"),
+        "{err}"
+    );
+    let grouped = String::from_utf8(out.stdout).unwrap();
+    let m = parse(&grouped);
+    let column = m.materials.iter().position(|x| x.name == "column").unwrap();
+    let mut sets: Vec<Vec<&str>> = m
+        .faces
+        .iter()
+        .filter(|f| f.material.map(|k| k.0 as usize) == Some(column))
+        .map(|f| {
+            let mut s: Vec<&str> = f.contours[0]
+                .iter()
+                .map(|&v| m.vertices[v.idx()].name.as_str())
+                .collect();
+            s.sort_unstable();
+            s
+        })
+        .collect();
+    assert_eq!(sets.len(), 4);
+    sets.sort();
+    sets.dedup();
+    assert_eq!(sets.len(), 2, "{sets:?}");
+    // The copy's area changes by the difference of the two triangulations.
+    let area = |r: &Value| areas(r).into_iter().find(|(k, _)| k == "column").unwrap().1;
+    let (a, b) = (area(&before), area(&check(&grouped, Some(eps))));
+    assert!((a - b).abs() <= 1e-5 * a && a != b, "{a} → {b}");
+    // The chain leaves no defect, and neither does ugcut after it.
+    let chain = ugkit::pipe(
+        src.as_bytes(),
+        &[
+            ("ugplanar", &[]),
+            ("ugvlmerge", &[]),
+            ("ugflip", &[]),
+            ("ugisect", &[]),
+            ("ugcopl", &[]),
+            ("ugclean", &[]),
+        ],
+    );
+    let chain = String::from_utf8(chain).unwrap();
+    let r = check(&chain, Some(eps));
+    for key in KEPT_OR_FEWER
+        .iter()
+        .chain(&["tvertices", "degenerate", "inconsistent"])
+    {
+        assert_eq!(len(&r, key), 0, "{key}: {}", r[key]);
+    }
+    let cut = run_ok("ugcut", &["-q", "-l", "0.5"], Some(chain.as_bytes()));
+    let r = check(&cut, Some(eps));
+    for key in KEPT_OR_FEWER
+        .iter()
+        .chain(&["tvertices", "degenerate", "inconsistent", "nonpatch"])
+    {
+        assert_eq!(len(&r, key), 0, "{key}: {}", r[key]);
+    }
+}
+
+/// Two cut points 1.003 epsilon apart in space and 0.9997 epsilon apart in
+/// the plane of the wall they lie on (one is 2.7e-6 off it), each on the
+/// other piece's edge. The weld keeps them apart and the T-vertex step puts
+/// each into the other's edge; the repair used to measure the edge between
+/// them in the plane, snap them together in each face, and so make both
+/// T-vertices again. "Too near" is measured in space everywhere now (the
+/// weld, the T-vertex step, the repair and ugcheck).
+#[test]
+fn points_kept_apart_by_the_weld_are_not_snapped_together_by_the_repair() {
+    let p = path("vlmerge/cut-points-an-epsilon-apart.ug");
+    let eps = "3.727313e-5";
+    let out = run("ugvlmerge", &["-v", "-e", eps, "--no-merge-faces", &p], None);
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("repaired"), "{err}");
+    assert!(err.contains("2 T-vertices inserted"), "{err}");
+    let text = String::from_utf8(out.stdout).unwrap();
+    let r = check(&text, Some(eps.parse().unwrap()));
+    for key in ["tvertices", "degenerate", "overlapping", "intersecting"] {
+        assert_eq!(len(&r, key), 0, "{key}: {}", r[key]);
+    }
+    let m = parse(&text);
+    for f in &m.faces {
+        let names: Vec<&str> = f.contours[0]
+            .iter()
+            .map(|&v| m.vertices[v.idx()].name.as_str())
+            .collect();
+        assert!(names.contains(&"p") && names.contains(&"q"), "{names:?}");
+    }
+}

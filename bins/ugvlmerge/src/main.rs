@@ -93,6 +93,12 @@ fn main() -> std::process::ExitCode {
                 st.dropped.len(),
                 ms(st.times[0])
             ));
+            if st.retriangulated > 0 {
+                c.verbose(format!(
+                    "{} triangles of twisted quads triangulated twice given the other copy's diagonal",
+                    st.retriangulated
+                ));
+            }
         }
         if opts.split_edges {
             c.verbose(format!(

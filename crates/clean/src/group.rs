@@ -24,7 +24,7 @@
 use std::time::{Duration, Instant};
 
 use geom::{DVec3, Plane, point_segment_distance};
-use rustc_hash::FxHashSet;
+use rustc_hash::{FxHashMap, FxHashSet};
 use ug::{FaceId, Model, VertexId};
 use winged::weld::Points;
 pub use winged::weld::{Split, degeneracy, merge_vertices, split_edges};
@@ -83,6 +83,9 @@ pub struct Stats {
     pub vertices_merged: usize,
     /// Faces dropped for having no area, in statement order.
     pub dropped: Vec<Dropped>,
+    /// Triangles of a twisted quad triangulated twice given the other
+    /// copy's diagonal ([`one_triangulation`]).
+    pub retriangulated: usize,
     /// Vertices inserted into edges (T-vertices removed).
     pub tvertices: usize,
     /// Faces whose contours crossed or touched themselves, repaired.
@@ -142,6 +145,9 @@ pub fn vlmerge(model: Model, opts: &Options) -> Result<(Model, Stats), ug::Diagn
                 face: label(f),
                 reason,
             }));
+    }
+    if opts.merge_vertices && opts.merge_faces {
+        st.retriangulated = one_triangulation(&mut mesh, opts.eps);
     }
     st.times[0] = t.elapsed();
 
@@ -284,6 +290,178 @@ pub struct Join {
     pub holes: usize,
     /// Collinear boundary vertices dropped.
     pub collinear: usize,
+}
+
+/// Largest angle between the normals of the four triangles of a quad
+/// triangulated twice for [`one_triangulation`] to take them as one
+/// twisted surface (a real tetrahedron's faces are 70° or more apart).
+const TWICE_ANGLE_DEG: f64 = 30.0;
+
+/// Step 1b: a twisted quadrilateral triangulated twice, once along each
+/// diagonal, is given one triangulation.
+///
+/// A duplicated non-planar quad `z x w y` exported as triangles (an OBJ or
+/// STL export, a CAD program triangulating a flipped duplicate from its
+/// first vertex) comes as the triangles `x y z`, `x y w` (diagonal `x y`)
+/// and `z w x`, `z w y` (diagonal `z w`): the four faces of a thin
+/// tetrahedron. Each pair folds onto the other at a few degrees, so near
+/// their shared edges the faces are within epsilon of each other, which no
+/// later step can resolve (ugcheck finds them intersecting, and after
+/// meshing overlapping). Once the vertices are welded, the later pair in
+/// statement order takes the earlier pair's diagonal, each face keeping its
+/// own orientation: the two copies are then duplicates (or back to back)
+/// as ugplanar makes them from the same quad in one piece, which ugclean
+/// resolves. Only when all four triangles have one material, the four
+/// vertices are not within `eps` of one plane (a planar quad's two
+/// triangulations are joined by [`merge_faces`] as they are), both diagonals
+/// are used by these triangles alone, and the four triangles' normals
+/// (oriented round the quad) are within [`TWICE_ANGLE_DEG`] of each other
+/// (the quad is convex seen along them, and thin). The later pair's area
+/// changes by the difference of the two triangulations' (second order in
+/// the twist). Returns the number of faces given the other diagonal.
+pub fn one_triangulation(mesh: &mut Mesh, eps: f64) -> usize {
+    let faces: Vec<FaceId> = mesh.faces().collect();
+    let nf = mesh.model().faces.len();
+    let mut rank = vec![u32::MAX; nf];
+    for (k, &f) in faces.iter().enumerate() {
+        rank[f.idx()] = k as u32;
+    }
+    let tri_of = |mesh: &Mesh, f: FaceId| -> Option<[VertexId; 3]> {
+        let c = &mesh.face(f).contours;
+        (c.len() == 1 && c[0].len() == 3).then(|| [c[0][0], c[0][1], c[0][2]])
+    };
+    // Triangles by their sorted vertices, in statement order.
+    let mut by_key: FxHashMap<[VertexId; 3], Vec<FaceId>> = FxHashMap::default();
+    for &f in &faces {
+        if let Some(mut t) = tri_of(mesh, f) {
+            t.sort_unstable();
+            by_key.entry(t).or_default().push(f);
+        }
+    }
+    if by_key.len() < 4 {
+        return 0;
+    }
+    let cos_tol = TWICE_ANGLE_DEG.to_radians().cos();
+    let mut taken = vec![false; nf];
+    let mut swaps: Vec<(FaceId, [VertexId; 3])> = Vec::new();
+    let key = |a: VertexId, b: VertexId, c: VertexId| {
+        let mut t = [a, b, c];
+        t.sort_unstable();
+        t
+    };
+    for &f in &faces {
+        if taken[f.idx()] {
+            continue;
+        }
+        let Some(tf) = tri_of(mesh, f) else { continue };
+        let mat = mesh.face(f).material;
+        for i in 0..3 {
+            let (x, y, z) = (tf[i], tf[(i + 1) % 3], tf[(i + 2) % 3]);
+            let Some(e) = mesh.edge_between(x, y) else {
+                continue;
+            };
+            // The other triangle on this diagonal.
+            let Some((g, w)) = mesh.edge(e).uses.iter().find_map(|u| {
+                let g = u.face;
+                if g == f || taken[g.idx()] || mesh.face(g).material != mat {
+                    return None;
+                }
+                let tg = tri_of(mesh, g)?;
+                let w = *tg.iter().find(|&&v| v != x && v != y)?;
+                (w != z).then_some((g, w))
+            }) else {
+                continue;
+            };
+            // The other diagonal's two triangles.
+            let pick = |k: [VertexId; 3]| {
+                by_key.get(&k).and_then(|l| {
+                    l.iter().copied().find(|&h| {
+                        !taken[h.idx()] && h != f && h != g && mesh.face(h).material == mat
+                    })
+                })
+            };
+            let (Some(h1), Some(h2)) = (pick(key(z, w, x)), pick(key(z, w, y))) else {
+                continue;
+            };
+            // Both diagonals used by triangles of these four vertices alone.
+            let quad = [z, x, w, y];
+            let inside = |a: VertexId, b: VertexId| {
+                mesh.edge_between(a, b).is_some_and(|e| {
+                    mesh.edge(e).uses.iter().all(|u| {
+                        tri_of(mesh, u.face).is_some_and(|t| t.iter().all(|v| quad.contains(v)))
+                    })
+                })
+            };
+            if !inside(x, y) || !inside(z, w) {
+                continue;
+            }
+            let p = quad.map(|v| mesh.pos(v));
+            // Not planar within eps (else merge_faces joins each pair).
+            let off = (0..4).any(|k| {
+                let (a, b, c) = (p[(k + 1) % 4], p[(k + 2) % 4], p[(k + 3) % 4]);
+                let n = (b - a).cross(c - a);
+                let l = n.length();
+                l > 0.0 && (n.dot(p[k] - a) / l).abs() > eps
+            });
+            if !off {
+                continue;
+            }
+            // Round the quad z x w y: the four triangles' normals agree.
+            let tri_n = |a: usize, b: usize, c: usize| (p[b] - p[a]).cross(p[c] - p[a]);
+            let ns = [
+                tri_n(0, 1, 3),
+                tri_n(1, 2, 3),
+                tri_n(0, 1, 2),
+                tri_n(0, 2, 3),
+            ];
+            let agree = ns.iter().enumerate().all(|(a, na)| {
+                ns[a + 1..].iter().all(|nb| {
+                    na.dot(*nb) >= cos_tol * na.length() * nb.length() && na.dot(*nb) > 0.0
+                })
+            });
+            if !agree {
+                continue;
+            }
+            for v in [f, g, h1, h2] {
+                taken[v.idx()] = true;
+            }
+            // The later pair takes the earlier pair's diagonal.
+            let first = |a: FaceId, b: FaceId| rank[a.idx()].min(rank[b.idx()]);
+            let (keep, redo, diag) = if first(f, g) <= first(h1, h2) {
+                ([f, g], [h1, h2], (x, y))
+            } else {
+                ([h1, h2], [f, g], (z, w))
+            };
+            let _ = keep;
+            // The new triangles: the diagonal with each of the other two corners.
+            let others: Vec<VertexId> = quad
+                .iter()
+                .copied()
+                .filter(|&v| v != diag.0 && v != diag.1)
+                .collect();
+            let mut redo = redo;
+            redo.sort_by_key(|h| rank[h.idx()]);
+            for (h, &o) in redo.iter().zip(&others) {
+                // Its orientation round the quad (the cycle z → x → w → y).
+                let old = tri_of(mesh, *h).expect("a triangle");
+                let with = (0..3).any(|k| {
+                    let (a, b) = (old[k], old[(k + 1) % 3]);
+                    (0..4).any(|q| quad[q] == a && quad[(q + 1) % 4] == b)
+                });
+                let mut t = [diag.0, diag.1, o];
+                t.sort_by_key(|v| quad.iter().position(|q| q == v));
+                if !with {
+                    t.reverse();
+                }
+                swaps.push((*h, t));
+            }
+            break;
+        }
+    }
+    for (h, t) in &swaps {
+        mesh.set_face_contours(*h, vec![t.to_vec()]);
+    }
+    swaps.len()
 }
 
 /// An edge two different faces walk in opposite directions, used by nothing else.
