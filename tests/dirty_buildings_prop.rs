@@ -5,7 +5,8 @@
 //! papers and pictures lying on other faces, rotated boxes pushed into
 //! walls, vaults of twisted quads, columns with a displaced vertex, flush
 //! panels and hanging light boxes, several storeys, random flips, duplicate
-//! faces, vertex jitter), over 200 seeds, and 40 more placed as CAD
+//! faces, vertex jitter; every fifth seed exported as triangles on vertex
+//! records of their own, as STL does), over 200 seeds, and 40 more placed as CAD
 //! exports place buildings on a site (turned, in millimetres, half a
 //! million and four million units from the origin):
 //!
@@ -30,10 +31,19 @@ use rayon::prelude::*;
 use ug::Model;
 
 /// The size of seed `s`'s building: one room on one storey, every fourth
-/// seed two storeys, every eighth two rooms a storey.
-/// (`UG_CAD=X,Y,S` sets rooms along x and y and storeys for every seed:
-/// for [`more_seeds`] by hand.)
+/// seed two storeys, every eighth two rooms a storey; every fifth exported
+/// as triangles. (`UG_CAD=X,Y,S` sets rooms along x and y and storeys for
+/// every seed, and `UG_TRIANGLES=1` exports every seed as triangles: for
+/// [`more_seeds`] by hand.)
 fn config(seed: u64) -> Cad {
+    let cfg = size(seed);
+    Cad {
+        triangles: seed % 5 == 2 || std::env::var("UG_TRIANGLES").is_ok_and(|v| v == "1"),
+        ..cfg
+    }
+}
+
+fn size(seed: u64) -> Cad {
     if let Ok(v) = std::env::var("UG_CAD") {
         let n: Vec<usize> = v
             .split(',')

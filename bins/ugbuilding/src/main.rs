@@ -10,7 +10,8 @@ Examples:
   ugbuilding --rooms 3 --lights --furniture 2 | ugcheck   lit, furnished rooms; furniture stands on the floors
   ugbuilding --faces 10000 --messy | ugplanar | ugflip | ugvlmerge | ugcut -l 1 | ugrad --max-shots 100
   ugbuilding --cad --faces 8600 --storeys 2 -o house.ug   drawn as CAD exports it (slabs, wall runs, openings, ...)
-  ugbuilding --cad --rooms 2 --storeys 3 --seed 5         a small three-storey one";
+  ugbuilding --cad --rooms 2 --storeys 3 --seed 5         a small three-storey one
+  ugbuilding --cad --faces 2000 --triangles                exported as triangles (STL-like)";
 
 /// Generate a CAD-like building as UniGrafix: a grid of 4 × 5 × 3 rooms
 /// (metres) with floors of 2 × 2 quads, walls of a lower and an upper face,
@@ -53,6 +54,11 @@ struct Args {
     /// Storeys of the --cad building.
     #[arg(long, default_value_t = 2, requires = "cad", value_parser = clap::value_parser!(u32).range(1..=50))]
     storeys: u32,
+    /// Export the --cad building as triangles, each on vertex records of its
+    /// own (as an STL or a triangulated OBJ export does): every convex face
+    /// fanned from its first vertex.
+    #[arg(long, requires = "cad")]
+    triangles: bool,
     /// Seed of the random choices.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -143,6 +149,7 @@ fn main() -> std::process::ExitCode {
             if let Some(v) = args.furniture {
                 cfg.furniture = v as usize;
             }
+            cfg.triangles = args.triangles;
             let model = building::cad(&cfg, args.seed);
             c.verbose(format!(
                 "{} storeys of {} × {} rooms, {} faces, {} vertices; seed {}",

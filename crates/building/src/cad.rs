@@ -42,7 +42,7 @@
 //! model.
 
 use glam::{DVec2, DVec3};
-use ug::{Defmat, Face, Material, MaterialDef, MaterialId, Model, Vertex, VertexId};
+use ug::{Defmat, Face, Item, Material, MaterialDef, MaterialId, Model, Vertex, VertexId};
 
 use crate::Rng;
 
@@ -87,6 +87,13 @@ pub struct Cad {
     /// Fraction of rooms lit by a flush ceiling panel (the others by a
     /// hanging light box).
     pub panels: f64,
+    /// Export every face as triangles fanned from its first vertex, each
+    /// triangle on vertex records of its own (an STL export, or an OBJ
+    /// export of triangles): the grouper has to weld and join them again,
+    /// and a flipped duplicate of a twisted quad comes triangulated along
+    /// the other diagonal. A face that is not convex in its plane keeps
+    /// its contour (on fresh vertex records too).
+    pub triangles: bool,
 }
 
 impl Default for Cad {
@@ -107,6 +114,7 @@ impl Default for Cad {
             furniture: 2,
             extras: true,
             panels: 0.5,
+            triangles: false,
         }
     }
 }
@@ -531,6 +539,9 @@ pub fn cad(cfg: &Cad, seed: u64) -> Model {
             }
         }
     }
+    if cfg.triangles {
+        b.m = triangles(&b.m);
+    }
     let size = b.m.bounds().map_or(1.0, |(lo, hi)| (hi - lo).length());
     let j = cfg.jitter * size;
     if j > 0.0 {
@@ -540,6 +551,80 @@ pub fn cad(cfg: &Cad, seed: u64) -> Model {
         }
     }
     b.m
+}
+
+/// The model exported as triangles (see [`Cad::triangles`]): every face
+/// fanned from its first vertex where its outer contour is convex in its
+/// plane (one without holes), each triangle written after its own three
+/// vertex records (`FACE.tK.0` …); other statements stay in place.
+fn triangles(m: &Model) -> Model {
+    let mut out = Model {
+        materials: m.materials.clone(),
+        ..Model::default()
+    };
+    for it in &m.items {
+        match *it {
+            Item::Vertex(_) => {}
+            Item::Face(f) => {
+                let face = &m.faces[f.idx()];
+                let name = face.name.clone().unwrap_or_else(|| format!("f{}", f.0 + 1));
+                let c = &face.contours[0];
+                let p: Vec<DVec3> = c.iter().map(|&v| m.pos(v)).collect();
+                // Newell's normal.
+                let n = (0..p.len()).fold(DVec3::ZERO, |n, i| {
+                    let (a, b) = (p[i], p[(i + 1) % p.len()]);
+                    n + DVec3::new(
+                        (a.y - b.y) * (a.z + b.z),
+                        (a.z - b.z) * (a.x + b.x),
+                        (a.x - b.x) * (a.y + b.y),
+                    )
+                });
+                let convex = face.contours.len() == 1
+                    && (0..p.len()).all(|i| {
+                        let (a, b, d) = (p[i], p[(i + 1) % p.len()], p[(i + 2) % p.len()]);
+                        (b - a).cross(d - b).dot(n) > 0.0
+                    });
+                let pieces: Vec<Vec<Vec<VertexId>>> = if convex && c.len() > 3 {
+                    (1..c.len() - 1)
+                        .map(|k| vec![vec![c[0], c[k], c[k + 1]]])
+                        .collect()
+                } else {
+                    vec![face.contours.clone()]
+                };
+                let many = pieces.len() > 1;
+                for (k, contours) in pieces.into_iter().enumerate() {
+                    let fname = if many {
+                        format!("{name}.t{}", k + 1)
+                    } else {
+                        name.clone()
+                    };
+                    let mut i = 0;
+                    let contours = contours
+                        .iter()
+                        .map(|cc| {
+                            cc.iter()
+                                .map(|&v| {
+                                    i += 1;
+                                    out.add_vertex(Vertex {
+                                        name: format!("{fname}.{}", i - 1),
+                                        pos: m.pos(v),
+                                        color: None,
+                                    })
+                                })
+                                .collect()
+                        })
+                        .collect();
+                    out.add_face(Face {
+                        name: Some(fname),
+                        contours,
+                        material: face.material,
+                    });
+                }
+            }
+            ref other => out.items.push(other.clone()),
+        }
+    }
+    out
 }
 
 fn room_contents(b: &mut B, cfg: &Cad, room: &Room, rr: &mut Rng, rf: &mut Rng) {
