@@ -477,3 +477,36 @@ fn cuts_cleanly(name: &str, eps: &str, lens: &[&str], tol: f64) {
         }
     }
 }
+
+/// A slab strip's corner with a jog of 1.1 epsilon along its foot and,
+/// 2.5 epsilon up the next side, the foot of a thin piece beside it
+/// (fixtures/cut/jog-beside-a-foot.ug, from the 100,000-face CAD building
+/// exported as triangles): the triangle of the jog and the foot is 0.8
+/// epsilon wide. The point across the jog must lie inside that needle's
+/// circumcircle, or the Delaunay triangulation keeps the needle (before: a
+/// degenerate patch and a T-vertex at every length but 2%).
+#[test]
+fn a_point_across_a_jog_is_taken_inside_the_needles_circle() {
+    cuts_cleanly(
+        "cut/jog-beside-a-foot.ug",
+        "1.08547e-4",
+        &["2", "0.7", "0.2", "2%"],
+        // (8e-8 measured: the strip is off its plane by jitter.)
+        1e-6,
+    );
+}
+
+/// A floor piece whose triangulation's refinement put three points within
+/// 0.4 epsilon of each other (fixtures/cut/refinement-points-in-a-crowd.ug,
+/// from the 100,000-face CAD building exported as triangles, the user's
+/// pipeline): a refinement point within epsilon of another vertex is
+/// removed again (before: four patches with an edge of no length at -l 2).
+#[test]
+fn refinement_points_within_epsilon_of_another_are_dropped() {
+    cuts_cleanly(
+        "cut/refinement-points-in-a-crowd.ug",
+        "1.08547e-4",
+        &["2", "0.7", "2%"],
+        1e-9,
+    );
+}

@@ -585,7 +585,11 @@ fn a_twisted_quad_triangulated_twice_gets_one_diagonal() {
 fn points_kept_apart_by_the_weld_are_not_snapped_together_by_the_repair() {
     let p = path("vlmerge/cut-points-an-epsilon-apart.ug");
     let eps = "3.727313e-5";
-    let out = run("ugvlmerge", &["-v", "-e", eps, "--no-merge-faces", &p], None);
+    let out = run(
+        "ugvlmerge",
+        &["-v", "-e", eps, "--no-merge-faces", &p],
+        None,
+    );
     assert!(out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!err.contains("repaired"), "{err}");

@@ -963,6 +963,7 @@ fn mesh_face(
         .with_max_additional_vertices(20 * before + 1000);
     if full {
         cdt.refine(params);
+        drop_crowded(&mut cdt, before, eps);
     }
     let in_cell = |p: DVec2| {
         let i = ((p.x - lo.x) / du).floor();
@@ -1324,6 +1325,36 @@ fn cell_ok(
     true
 }
 
+/// Removes the points the refinement added (those from index `first` on)
+/// that lie within `eps` of another vertex, later ones first: an edge
+/// between them would have no length. (The 100,000-face building exported
+/// as triangles, the user's pipeline: a floor with hundreds of holes got
+/// three refinement points within 0.4 epsilon of each other, and patches
+/// with zero-length edges.) In a Delaunay triangulation a point's nearest
+/// vertex is one of its neighbours, so only those are looked at; removal
+/// swaps the last vertex into the removed one's place, so the boundary's
+/// handles (before `first`) stay valid.
+fn drop_crowded(cdt: &mut ConstrainedDelaunayTriangulation<Point2<f64>>, first: usize, eps: f64) {
+    use spade::handles::FixedVertexHandle;
+    if eps.is_nan() || eps <= 0.0 {
+        return;
+    }
+    let mut i = cdt.num_vertices();
+    while i > first {
+        i -= 1;
+        let h = FixedVertexHandle::from_index(i);
+        let v = cdt.vertex(h);
+        let p = v.position();
+        let crowded = v.out_edges().any(|e| {
+            let q = e.to().position();
+            (q.x - p.x).hypot(q.y - p.y) <= eps
+        });
+        if crowded {
+            Triangulation::remove(cdt, h);
+        }
+    }
+}
+
 /// Boundary edges shorter than this many epsilons are jogs (see
 /// [`jog_points`]). 2 until placed seed 3871: a step of 4 epsilon in a
 /// strip's side had the strip's far corner as its Delaunay apex (a needle,
@@ -1439,19 +1470,30 @@ fn jog_points(
                 n = -n;
             }
             let mid = (pa + pb) / 2.0;
-            let mut best: Option<(f64, DVec2)> = None;
+            // The point becomes the apex only inside the needle's
+            // circumcircle (else the Delaunay triangulation keeps the
+            // needle): such points come first, then the widest. (The
+            // 100,000-face building exported as triangles: a slab's side
+            // strip with a jog of 1.1 epsilon at a corner whose other
+            // neighbour, a foot, is 2.5 epsilon up the next side; the widest
+            // point straight across lay outside the circle.)
+            let circle = circumcircle(pa, pb, po);
+            let breaks = |q: DVec2| circle.is_some_and(|(c, r)| c.distance(q) < r);
+            let mut best: Option<(bool, f64, DVec2)> = None;
             for deg in [0.0f64, 4.0, -4.0, 8.0, -8.0, 12.0, -12.0] {
                 let (sn, cs) = deg.to_radians().sin_cos();
                 let d = DVec2::new(n.x * cs - n.y * sn, n.x * sn + n.y * cs);
                 for k in [2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0, 24.0, 32.0] {
                     let q = mid + d * (k * eps);
                     let score = width([pa, pb, q], eps).min(clearance(q, (pa, pb)));
-                    if best.is_none_or(|(s, _)| score > s) && inside(q) {
-                        best = Some((score, q));
+                    let b = breaks(q) && score > eps;
+                    let better = best.is_none_or(|(bb, s, _)| (b, score) > (bb, s));
+                    if better && inside(q) {
+                        best = Some((b, score, q));
                     }
                 }
             }
-            match best {
+            match best.map(|(_, s, q)| (s, q)) {
                 Some((score, q))
                     if score > eps && out.iter().all(|o| o.distance(q) > 2.0 * eps) =>
                 {
@@ -1472,6 +1514,19 @@ fn jog_points(
         }
     }
     (out, stuck)
+}
+
+/// The circle through three points (centre, radius); `None` when they are
+/// collinear.
+fn circumcircle(a: DVec2, b: DVec2, c: DVec2) -> Option<(DVec2, f64)> {
+    let (ab, ac) = (b - a, c - a);
+    let d = 2.0 * ab.perp_dot(ac);
+    if d == 0.0 || !d.is_finite() {
+        return None;
+    }
+    let (l1, l2) = (ab.length_squared(), ac.length_squared());
+    let o = DVec2::new(ac.y * l1 - ab.y * l2, ab.x * l2 - ac.x * l1) / d;
+    Some((a + o, o.length()))
 }
 
 /// Boundary edges shorter than this many epsilons whose needle no point
