@@ -608,3 +608,36 @@ fn points_kept_apart_by_the_weld_are_not_snapped_together_by_the_repair() {
         assert!(names.contains(&"p") && names.contains(&"q"), "{names:?}");
     }
 }
+
+/// A face exported as two triangles along one diagonal, twice more as
+/// copies (one on fresh vertex records, one flipped): the diagonal has six
+/// uses and is no seam, but each copy is joined across it to its own other
+/// half, so the grouper writes three quads (the duplicates are ugclean's).
+/// Before, all six triangles stayed (a box's sides in a triangle export).
+#[test]
+fn each_copy_of_a_split_face_is_joined_to_its_own_half() {
+    let p = path("vlmerge/duplicates-split-along-one-diagonal.ug");
+    let out = run_ok("ugvlmerge", &["-q", &p], None);
+    let m = parse(&out);
+    assert_eq!(m.faces.len(), 3, "{out}");
+    for f in &m.faces {
+        assert_eq!(f.contours.len(), 1);
+        assert_eq!(f.contours[0].len(), 4, "{out}");
+    }
+    let names: Vec<&str> = m.faces.iter().filter_map(|f| f.name.as_deref()).collect();
+    assert_eq!(names, ["side.t1", "side.dup.t1", "side.flip.t1"]);
+    // Two copies face one way, the flipped one the other.
+    let dirs: Vec<f64> = m
+        .faces
+        .iter()
+        .map(|f| newell_along(&m, &f.contours[0], [0.0, 1.0, 0.0]))
+        .collect();
+    assert!(
+        dirs[0] * dirs[1] > 0.0 && dirs[0] * dirs[2] < 0.0,
+        "{dirs:?}"
+    );
+    let before = check(&std::fs::read_to_string(&p).unwrap(), None);
+    let after = check(&out, before["epsilon"].as_f64());
+    let (a, b) = (areas(&before), areas(&after));
+    assert!((a[0].1 - b[0].1).abs() <= 1e-12, "{a:?} {b:?}");
+}

@@ -470,6 +470,60 @@ fn is_seam(mesh: &Mesh, e: EdgeId) -> bool {
     u.len() == 2 && u[0].face != u[1].face && u[0].forward != u[1].forward
 }
 
+/// The face across edge `e` from face `f` that the grouper may join `f`
+/// to: the other face of a seam; or, where the edge's faces are two faces
+/// and their copies (the same vertices and material: a face exported twice
+/// as triangles, each copy split along the same diagonal, so the diagonal
+/// has four uses and is no seam), the copy of the other face paired with
+/// `f`: the k-th by id of those walking `e` against `f`, when `f` is the
+/// k-th of its own copies walking it as `f` does. The pairing is
+/// symmetric, so each copy joins its own layer.
+fn partner(mesh: &Mesh, e: EdgeId, f: FaceId) -> Option<FaceId> {
+    let u = &mesh.edge(e).uses;
+    if u.len() == 2 {
+        return (is_seam(mesh, e) && (u[0].face == f || u[1].face == f))
+            .then(|| if u[0].face == f { u[1].face } else { u[0].face });
+    }
+    if u.len() < 4 || u.len() % 2 == 1 || u.iter().filter(|x| x.face == f).count() != 1 {
+        return None;
+    }
+    let sig = |g: FaceId| {
+        let face = mesh.face(g);
+        let mut v: Vec<VertexId> = face.contours.iter().flatten().copied().collect();
+        v.sort_unstable();
+        (face.material, v)
+    };
+    let mine = sig(f);
+    let fwd = u.iter().find(|x| x.face == f)?.forward;
+    let mut other = None;
+    let (mut same, mut opp, mut n_mine) = (Vec::new(), Vec::new(), 0usize);
+    for x in u {
+        let s = sig(x.face);
+        if s == mine {
+            n_mine += 1;
+            if x.forward == fwd {
+                same.push(x.face);
+            }
+        } else {
+            match &other {
+                None => other = Some(s),
+                Some(o) if *o == s => {}
+                _ => return None,
+            }
+            if x.forward != fwd {
+                opp.push(x.face);
+            }
+        }
+    }
+    if 2 * n_mine != u.len() || same.len() != opp.len() {
+        return None;
+    }
+    same.sort_unstable();
+    opp.sort_unstable();
+    let k = same.iter().position(|&g| g == f)?;
+    Some(opp[k])
+}
+
 /// The plane of a sound face all of whose vertices lie within `eps` of it.
 fn flat_plane(mesh: &Mesh, f: FaceId, eps: f64) -> Option<Plane> {
     if degeneracy(mesh, f, eps).is_some() {
@@ -495,9 +549,13 @@ fn within(mesh: &Mesh, f: FaceId, pl: &Plane, eps: f64) -> bool {
 /// two faces walking them in opposite directions, so facing the same way) to
 /// faces that have the seed's material, a normal within `angle_deg` degrees
 /// of the seed's, all vertices within `eps` of the seed's plane and the
-/// seed's vertices within `eps` of theirs. A face sharing any other edge with
-/// the group (a non-manifold edge: three walls along one line) is not taken,
-/// so no edge another face uses disappears inside a joined face. When the
+/// seed's vertices within `eps` of theirs. Where a face and its copy (the
+/// same vertices and material) both come split along the same diagonal,
+/// that diagonal has four uses: each copy is joined across it to its own
+/// other half ([`partner`]), so the copies become two copies of one face.
+/// A face sharing any other edge with the group (a non-manifold edge: three
+/// walls along one line) is not taken, so no edge another face uses
+/// disappears inside a joined face. When the
 /// joined face would leave inside it a vertex that a face outside the group
 /// uses (a pyramid's apex on a floor), the group's faces around that vertex
 /// join nothing and the group grows again without them.
@@ -626,11 +684,9 @@ impl Grow<'_> {
             let f = members[qi];
             qi += 1;
             for e in mesh.face_edges(f) {
-                if !is_seam(mesh, e) {
+                let Some(g) = partner(mesh, e, f) else {
                     continue;
-                }
-                let u = &mesh.edge(e).uses;
-                let g = if u[0].face == f { u[1].face } else { u[0].face };
+                };
                 if group[g.idx()] != NONE || excluded[g.idx()] {
                     continue;
                 }
@@ -642,12 +698,11 @@ impl Grow<'_> {
                     && within(mesh, g, &ps, self.eps)
                     && within(mesh, s, &pg, self.eps)
                     && !mesh.face_edges(g).into_iter().any(|e2| {
-                        !is_seam(mesh, e2)
-                            && mesh
-                                .edge(e2)
-                                .uses
-                                .iter()
-                                .any(|u| u.face != g && group[u.face.idx()] == gid)
+                        let p = partner(mesh, e2, g);
+                        mesh.edge(e2)
+                            .uses
+                            .iter()
+                            .any(|u| u.face != g && group[u.face.idx()] == gid && Some(u.face) != p)
                     });
                 if joinable {
                     group[g.idx()] = gid;
@@ -708,7 +763,7 @@ fn trace_group(
             let k = c.len();
             for i in 0..k {
                 let e = es[i];
-                if is_seam(mesh, e) && mesh.edge(e).uses.iter().all(|u| in_group(u.face)) {
+                if partner(mesh, e, f).is_some_and(in_group) {
                     continue;
                 }
                 halves.push(HalfEdge {
