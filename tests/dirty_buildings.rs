@@ -8,7 +8,7 @@
 
 use std::collections::BTreeMap;
 
-use ugkit::{pipe, run, run_ok};
+use ugkit::{chain, pipe, run, run_ok};
 
 fn building(seed: u64, storeys: usize) -> Vec<u8> {
     run_ok(
@@ -76,17 +76,7 @@ fn the_users_pipeline_lights_dirty_buildings() {
 fn the_full_chain_passes_ugcheck_deny_defects() {
     for (seed, storeys) in SEEDS {
         let input = building(seed, storeys);
-        let clean = pipe(
-            &input,
-            &[
-                ("ugplanar", &[]),
-                ("ugvlmerge", &[]),
-                ("ugflip", &[]),
-                ("ugisect", &[]),
-                ("ugcopl", &[]),
-                ("ugclean", &[]),
-            ],
-        );
+        let clean = chain(&input);
         let out = run("ugcheck", &["--deny", "defects"], Some(&clean));
         assert!(
             out.status.success(),

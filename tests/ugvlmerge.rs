@@ -545,18 +545,7 @@ fn a_twisted_quad_triangulated_twice_gets_one_diagonal() {
     let (a, b) = (area(&before), area(&check(&grouped, Some(eps))));
     assert!((a - b).abs() <= 1e-5 * a && a != b, "{a} → {b}");
     // The chain leaves no defect, and neither does ugcut after it.
-    let chain = ugkit::pipe(
-        src.as_bytes(),
-        &[
-            ("ugplanar", &[]),
-            ("ugvlmerge", &[]),
-            ("ugflip", &[]),
-            ("ugisect", &[]),
-            ("ugcopl", &[]),
-            ("ugclean", &[]),
-        ],
-    );
-    let chain = String::from_utf8(chain).unwrap();
+    let chain = String::from_utf8(ugkit::chain(src.as_bytes())).unwrap();
     let r = check(&chain, Some(eps));
     for key in KEPT_OR_FEWER
         .iter()

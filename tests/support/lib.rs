@@ -97,6 +97,22 @@ pub fn pipe(input: &[u8], stages: &[(&str, &[&str])]) -> Vec<u8> {
     data
 }
 
+/// The recommended cleaning chain on a model, each stage asserted to
+/// succeed: ugplanar | ugvlmerge | ugflip | ugisect | ugcopl | ugclean.
+pub fn chain(input: &[u8]) -> Vec<u8> {
+    pipe(
+        input,
+        &[
+            ("ugplanar", &[]),
+            ("ugvlmerge", &[]),
+            ("ugflip", &[]),
+            ("ugisect", &[]),
+            ("ugcopl", &[]),
+            ("ugclean", &[]),
+        ],
+    )
+}
+
 /// The recommended cleaning chain and `ugcut -l LEN` on a model, each
 /// stage asserted to succeed: ugplanar | ugvlmerge | ugflip | ugisect |
 /// ugcopl | ugclean | ugcut.
