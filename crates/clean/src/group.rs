@@ -425,14 +425,15 @@ pub fn one_triangulation(mesh: &mut Mesh, eps: f64) -> usize {
             for v in [f, g, h1, h2] {
                 taken[v.idx()] = true;
             }
-            // The later pair takes the earlier pair's diagonal.
+            // The later pair takes the earlier pair's diagonal (f, the
+            // first of the four in statement order, is in the earlier pair
+            // unless ranks say otherwise).
             let first = |a: FaceId, b: FaceId| rank[a.idx()].min(rank[b.idx()]);
-            let (keep, redo, diag) = if first(f, g) <= first(h1, h2) {
-                ([f, g], [h1, h2], (x, y))
+            let (redo, diag) = if first(f, g) <= first(h1, h2) {
+                ([h1, h2], (x, y))
             } else {
-                ([h1, h2], [f, g], (z, w))
+                ([f, g], (z, w))
             };
-            let _ = keep;
             // The new triangles: the diagonal with each of the other two corners.
             let others: Vec<VertexId> = quad
                 .iter()
