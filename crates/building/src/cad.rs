@@ -570,15 +570,7 @@ fn triangles(m: &Model) -> Model {
                 let name = face.name.clone().unwrap_or_else(|| format!("f{}", f.0 + 1));
                 let c = &face.contours[0];
                 let p: Vec<DVec3> = c.iter().map(|&v| m.pos(v)).collect();
-                // Newell's normal.
-                let n = (0..p.len()).fold(DVec3::ZERO, |n, i| {
-                    let (a, b) = (p[i], p[(i + 1) % p.len()]);
-                    n + DVec3::new(
-                        (a.y - b.y) * (a.z + b.z),
-                        (a.z - b.z) * (a.x + b.x),
-                        (a.x - b.x) * (a.y + b.y),
-                    )
-                });
+                let n = geom::newell_normal(&p);
                 let convex = face.contours.len() == 1
                     && (0..p.len()).all(|i| {
                         let (a, b, d) = (p[i], p[(i + 1) % p.len()], p[(i + 2) % p.len()]);

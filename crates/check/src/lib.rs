@@ -607,12 +607,6 @@ fn shape_defect(cx: &Ctx<'_>, face: &ug::Face, pts: &[Vec<DVec3>], eps: f64) -> 
         .zip(&g.contours_2d)
         .flat_map(|(c, c2)| c.iter().copied().zip(c2.iter().copied()))
         .collect();
-    let pos3: std::collections::HashMap<VertexId, DVec3> = face
-        .contours
-        .iter()
-        .zip(pts)
-        .flat_map(|(c, c3)| c.iter().copied().zip(c3.iter().copied()))
-        .collect();
     verts.sort_by_key(|v| v.0);
     verts.dedup_by_key(|v| v.0);
     let index = (edges.len() > 24).then(|| {
@@ -662,7 +656,8 @@ fn shape_defect(cx: &Ctx<'_>, face: &ug::Face, pts: &[Vec<DVec3>], eps: f64) -> 
             }
             // In space, as the weld and the T-vertex test measure (the
             // plane's frame can bring a pair kept apart a hair closer).
-            let d = point_segment_distance(pos3[&v], pos3[&ev[0]], pos3[&ev[1]]).0;
+            let pos = |v: VertexId| cx.m.pos(v);
+            let d = point_segment_distance(pos(v), pos(ev[0]), pos(ev[1])).0;
             if d <= eps {
                 return Some(format!(
                     "narrower than epsilon: vertex {} lies {} from edge {}-{}",

@@ -330,12 +330,16 @@ pub fn one_triangulation(mesh: &mut Mesh, eps: f64) -> usize {
         let c = &mesh.face(f).contours;
         (c.len() == 1 && c[0].len() == 3).then(|| [c[0][0], c[0][1], c[0][2]])
     };
+    let key = |a: VertexId, b: VertexId, c: VertexId| {
+        let mut t = [a, b, c];
+        t.sort_unstable();
+        t
+    };
     // Triangles by their sorted vertices, in statement order.
     let mut by_key: FxHashMap<[VertexId; 3], Vec<FaceId>> = FxHashMap::default();
     for &f in &faces {
-        if let Some(mut t) = tri_of(mesh, f) {
-            t.sort_unstable();
-            by_key.entry(t).or_default().push(f);
+        if let Some([a, b, c]) = tri_of(mesh, f) {
+            by_key.entry(key(a, b, c)).or_default().push(f);
         }
     }
     if by_key.len() < 4 {
@@ -344,11 +348,6 @@ pub fn one_triangulation(mesh: &mut Mesh, eps: f64) -> usize {
     let cos_tol = TWICE_ANGLE_DEG.to_radians().cos();
     let mut taken = vec![false; nf];
     let mut swaps: Vec<(FaceId, [VertexId; 3])> = Vec::new();
-    let key = |a: VertexId, b: VertexId, c: VertexId| {
-        let mut t = [a, b, c];
-        t.sort_unstable();
-        t
-    };
     for &f in &faces {
         if taken[f.idx()] {
             continue;

@@ -22,6 +22,13 @@ pub fn orient2d(a: DVec2, b: DVec2, c: DVec2) -> i32 {
     sign(robust::orient2d(c2(a), c2(b), c2(c)))
 }
 
+/// Exact position of `d` against the circle through a, b, c: +1 inside,
+/// -1 outside, 0 on it, whichever way a, b, c turn (the Delaunay test).
+#[inline]
+pub fn incircle(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> i32 {
+    sign(robust::incircle(c2(a), c2(b), c2(c), c2(d))) * orient2d(a, b, c)
+}
+
 /// Exact side of `d` relative to the plane through a, b, c:
 /// +1 when d lies below (a, b, c counter-clockwise seen from above), -1 above, 0 coplanar
 /// (Shewchuk's convention).
@@ -95,6 +102,28 @@ pub fn point_segment_distance(p: DVec3, a: DVec3, b: DVec3) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn incircle_is_inside_either_way_round() {
+        let (a, b, c) = (
+            DVec2::new(0.0, 0.0),
+            DVec2::new(2.0, 0.0),
+            DVec2::new(0.0, 2.0),
+        );
+        // The circle's centre is (1, 1), its radius √2.
+        for (d, want) in [
+            (DVec2::new(1.0, 1.0), 1),
+            (DVec2::new(2.0, 2.0), 0),
+            (DVec2::new(2.5, 2.5), -1),
+            (DVec2::new(1.0, 1.0 + 2f64.sqrt() * 0.999), 1),
+        ] {
+            assert_eq!(incircle(a, b, c, d), want, "{d}");
+            assert_eq!(incircle(a, c, b, d), want, "{d}, clockwise");
+        }
+        // Collinear: no circle, nothing inside.
+        let e = DVec2::new(4.0, 0.0);
+        assert_eq!(incircle(a, b, e, DVec2::new(1.0, 0.5)), 0);
+    }
 
     #[test]
     fn orient2d_is_exact_near_degenerate() {

@@ -1477,8 +1477,7 @@ fn jog_points(
             // strip with a jog of 1.1 epsilon at a corner whose other
             // neighbour, a foot, is 2.5 epsilon up the next side; the widest
             // point straight across lay outside the circle.)
-            let circle = circumcircle(pa, pb, po);
-            let breaks = |q: DVec2| circle.is_some_and(|(c, r)| c.distance(q) < r);
+            let breaks = |q: DVec2| geom::incircle(pa, pb, po, q) > 0;
             let mut best: Option<(bool, f64, DVec2)> = None;
             for deg in [0.0f64, 4.0, -4.0, 8.0, -8.0, 12.0, -12.0] {
                 let (sn, cs) = deg.to_radians().sin_cos();
@@ -1514,19 +1513,6 @@ fn jog_points(
         }
     }
     (out, stuck)
-}
-
-/// The circle through three points (centre, radius); `None` when they are
-/// collinear.
-fn circumcircle(a: DVec2, b: DVec2, c: DVec2) -> Option<(DVec2, f64)> {
-    let (ab, ac) = (b - a, c - a);
-    let d = 2.0 * ab.perp_dot(ac);
-    if d == 0.0 || !d.is_finite() {
-        return None;
-    }
-    let (l1, l2) = (ab.length_squared(), ac.length_squared());
-    let o = DVec2::new(ac.y * l1 - ab.y * l2, ab.x * l2 - ac.x * l1) / d;
-    Some((a + o, o.length()))
 }
 
 /// Boundary edges shorter than this many epsilons whose needle no point
