@@ -96,6 +96,36 @@ fn a_corner_just_inside_a_face_by_its_edge_is_cut_round() {
     );
 }
 
+/// A pitched roof's ridge end, placed far from the origin
+/// (fixtures/isect/ridge-end-crossing.ug): the left slab's underside and
+/// its long, thin end face share an edge that the right underside crosses.
+/// The two left faces' planes meet the right one's in lines a few epsilon
+/// apart there, and each pair's cut once ended on its own line: two
+/// points 1.9 epsilon apart and a needle between them, which ugcopl took
+/// for a piece of the right underside (inconsistent edges after it). A cut
+/// ends at the edge's crossing itself, found once for both faces: no edge
+/// shorter than three epsilon (ugcopl's coplanar tolerance) is left, and
+/// ugcopl leaves the orientation consistent.
+#[test]
+fn faces_sharing_an_edge_cut_it_at_one_point() {
+    let name = "isect/ridge-end-crossing.ug";
+    let src = std::fs::read_to_string(fixture(name)).unwrap();
+    let eps = ["-e", "1.957e-5"];
+    assert_eq!(count(&check_eps(&src, &eps), "intersecting"), 2);
+    // (Snap rounding moves area by at most epsilon times the boundary's
+    // length, 1.4e-4 m² here: the end face's moves 1.7e-6 m².)
+    let out = assert_cut_eps(name, &src, &eps, 1e-5);
+    let three = check_eps(&out, &["-e", "5.871e-5"]);
+    assert_eq!(
+        count(&three, "degenerate"),
+        0,
+        "{}\n{out}",
+        three["degenerate"]
+    );
+    let copl = run_ok("ugcopl", &eps, Some(out.as_bytes()));
+    assert_eq!(count(&check_eps(&copl, &eps), "inconsistent"), 0, "{copl}");
+}
+
 /// A rug's piece on a tile's, overlapping on a triangle with their planes
 /// tilted apart by jitter (fixtures/isect/rug-tilted-on-a-tile.ug, from
 /// the 100,000-face CAD building): ugcheck classes them as crossing, but

@@ -223,7 +223,7 @@ pub fn relate(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Relation {
     let (p0, dir, ts) = match line_of(a, b, eps) {
         LineCase::Coplanar => return Relation::Coplanar,
         LineCase::Disjoint => return Relation::Disjoint,
-        LineCase::Line { p0, dir, ts } => (p0, dir, ts),
+        LineCase::Line { p0, dir, ts, .. } => (p0, dir, ts),
     };
     let mut samples = Vec::with_capacity(ts.len() * 2);
     for (k, &t) in ts.iter().enumerate() {
@@ -259,7 +259,15 @@ pub fn relate(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Relation {
 enum LineCase {
     Coplanar,
     Disjoint,
-    Line { p0: DVec3, dir: DVec3, ts: Vec<f64> },
+    /// The line through `p0` along `dir`, and where the faces' boundaries
+    /// meet it: `ts` along the line, and `at` the points themselves (a
+    /// vertex on the other plane, or an edge's crossing of it).
+    Line {
+        p0: DVec3,
+        dir: DVec3,
+        ts: Vec<f64>,
+        at: Vec<DVec3>,
+    },
 }
 
 impl FaceGeom {
@@ -352,7 +360,10 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
     }
     let p0 = (n2.cross(u) * a.plane.d + u.cross(n1) * b.plane.d) / uu;
     let dir = u / uu.sqrt();
-    let mut ts: Vec<f64> = Vec::new();
+    // Each boundary event: where along the line, and the point itself.
+    // An edge's crossing is computed from the edge with its end points in
+    // one order, so the faces that share the edge find the same point.
+    let mut ev: Vec<(f64, DVec3)> = Vec::new();
     for (g, other, edges) in [(a, b, &ea), (b, a, &eb)] {
         for &(ci, i) in edges {
             let c = &g.contours[ci as usize];
@@ -363,34 +374,47 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
                 snap(other.plane.dist(q), eps),
             );
             if dp == 0.0 {
-                ts.push((p - p0).dot(dir));
+                ev.push(((p - p0).dot(dir), p));
             } else if dp * dq < 0.0 {
+                let (p, q, dp, dq) = if p.to_array() <= q.to_array() {
+                    (p, q, dp, dq)
+                } else {
+                    (q, p, dq, dp)
+                };
                 let x = p + (q - p) * (dp / (dp - dq));
-                ts.push((x - p0).dot(dir));
+                ev.push(((x - p0).dot(dir), x));
             }
         }
     }
-    if ts.is_empty() {
+    if ev.is_empty() {
         return LineCase::Disjoint;
     }
-    ts.sort_by(f64::total_cmp);
-    ts.dedup_by(|x, y| (*x - *y).abs() <= eps);
-    LineCase::Line { p0, dir, ts }
+    ev.sort_by(|x, y| x.0.total_cmp(&y.0));
+    ev.dedup_by(|x, y| (x.0 - y.0).abs() <= eps);
+    let (ts, at) = ev.into_iter().unzip();
+    LineCase::Line { p0, dir, ts, at }
 }
 
 /// Where two faces that are not coplanar cut each other: the segments of
 /// the line where their planes meet that lie in both (closed) faces and in
-/// the interior of at least one, in 3-D, ordered along the line. Where a
+/// the interior of at least one, in 3-D, ordered along the line. A segment
+/// ends at the boundary event itself (a face's vertex on the other's
+/// plane, or an edge's crossing of it), not at its projection on the line:
+/// the planes of faces that are planar only within epsilon (a long, thin
+/// end face of a slab, jittered) meet in slightly different lines, and the
+/// faces sharing an edge then found its crossing of a third face's plane
+/// at points up to a few epsilons apart, which became a needle. Where a
 /// face only rests on the other's boundary (edge on edge) there is no cut.
 /// Where they meet at a single point inside one of them (a tip resting on a
 /// face), a cut of 4 `eps` along the line through the point stands for it.
 /// Empty for disjoint, touching or coplanar faces.
 pub fn cut_segments(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Vec<(DVec3, DVec3)> {
-    let (p0, dir, ts) = match line_of(a, b, eps) {
-        LineCase::Line { p0, dir, ts } => (p0, dir, ts),
+    let (p0, dir, ts, at) = match line_of(a, b, eps) {
+        LineCase::Line { p0, dir, ts, at } => (p0, dir, ts, at),
         _ => return Vec::new(),
     };
-    let mut out: Vec<(f64, f64)> = Vec::new();
+    // Stretches between boundary events, as indices into `ts`.
+    let mut out: Vec<(usize, usize)> = Vec::new();
     // At least 14.5° between the planes (sin θ ≥ 1/4).
     let steep = a.plane.n.cross(b.plane.n).length_squared() >= 1.0 / 16.0;
     let meets = |t: f64| {
@@ -401,7 +425,7 @@ pub fn cut_segments(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Vec<(DVec3, DVec3)>
             && lb != Location::Outside
             && (la == Location::Inside || lb == Location::Inside)
     };
-    for w in ts.windows(2) {
+    for (k, w) in ts.windows(2).enumerate() {
         let s = p0 + dir * ((w[0] + w[1]) / 2.0);
         let la = a.locate(s, eps);
         if la == Location::Outside {
@@ -426,27 +450,32 @@ pub fn cut_segments(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Vec<(DVec3, DVec3)>
             continue;
         }
         match out.last_mut() {
-            Some(last) if last.1 == w[0] => last.1 = w[1],
-            _ => out.push((w[0], w[1])),
+            Some(last) if last.1 == k => last.1 = k + 1,
+            _ => out.push((k, k + 1)),
         }
     }
     // Where they meet at a point only (a corner resting inside a face):
     // a cut of 4 epsilon along the line through it, for the cutter to
     // extend until the point lies on an edge.
+    let mut segs: Vec<(f64, DVec3, DVec3)> = out
+        .into_iter()
+        .map(|(i, j)| (ts[i], at[i], at[j]))
+        .collect();
     if POINT_CUTS {
-        for &t in &ts {
-            if out.iter().any(|&(t0, t1)| t >= t0 - eps && t <= t1 + eps) {
+        for (&t, &x) in ts.iter().zip(&at) {
+            if segs.iter().any(|&(t0, p, q)| {
+                let t1 = t0 + (q - p).dot(dir);
+                t >= t0 - eps && t <= t1 + eps
+            }) {
                 continue;
             }
             if meets(t) {
-                out.push((t - 2.0 * eps, t + 2.0 * eps));
+                segs.push((t - 2.0 * eps, x - dir * (2.0 * eps), x + dir * (2.0 * eps)));
             }
         }
     }
-    out.sort_by(|x, y| x.0.total_cmp(&y.0));
-    out.into_iter()
-        .map(|(t0, t1)| (p0 + dir * t0, p0 + dir * t1))
-        .collect()
+    segs.sort_by(|x, y| x.0.total_cmp(&y.0));
+    segs.into_iter().map(|(_, p, q)| (p, q)).collect()
 }
 
 #[cfg(test)]
