@@ -16,6 +16,21 @@
 //!   to it through shared edges that are coplanar with it, of its material
 //!   and facing its way. Equal areas remove the later face.
 //!
+//! Where the two faces' corners are different records within the
+//! coincidence tolerance of each other (a wall's end between 1 and 3
+//! epsilon proud of a facade: the weld kept the corners apart, ugcopl found
+//! the faces coplanar), they become one record. Otherwise the removed
+//! face's neighbours, which share its edges, and the kept face's, which
+//! share the kept face's, would meet no face along those edges: an open or
+//! inconsistently oriented edge where the pair was. Either the kept face's
+//! corners take the removed face's records (the wall's end moves onto the
+//! facade's plane, its sides only grow or shrink along themselves) or the
+//! removed face's neighbours take the kept face's (a prism's sides whose
+//! bottom, a hair above the floor, goes): whichever bends the faces that
+//! move less, and neither when both would bend a face off its plane by
+//! more than half an epsilon. A record is not moved where that would make
+//! a face name a vertex twice.
+//!
 //! Vertices that only removed faces used are removed too.
 
 use check::PairKind;
@@ -30,6 +45,8 @@ pub struct Stats {
     /// (removed face, kept face, reason)
     pub removed: Vec<(String, String, String)>,
     pub area_removed: f64,
+    /// Vertex records of kept faces replaced by the removed face's.
+    pub snapped: usize,
 }
 
 fn label(m: &Model, k: usize, f: FaceId) -> String {
@@ -141,6 +158,7 @@ pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
     let mesh = Mesh::from_model(m.clone());
     let surfaces = std::cell::OnceCell::new();
     let mut removed = vec![false; m.faces.len()];
+    let mut kept_for: Vec<(FaceId, FaceId)> = Vec::new();
     for (i, j) in pairs {
         let (a, b) = (faces[i], faces[j]);
         if removed[a.idx()] || removed[b.idx()] {
@@ -171,8 +189,209 @@ pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
         stats
             .removed
             .push((label(m, loser, lf), label(m, winner, faces[winner]), reason));
+        kept_for.push((lf, faces[winner]));
     }
-    (remove_faces(m, &removed), stats)
+    let mut out = m.clone();
+    let gone = snap_onto_removed(
+        &mut out,
+        &kept_for,
+        &mut removed,
+        eps,
+        geom::intersect::CLEAN_COPLANAR_EPSILONS * eps,
+    );
+    stats.snapped = gone.len();
+    let mut out = remove_faces(&out, &removed);
+    if !gone.is_empty() {
+        let mut replaced = vec![false; out.vertices.len()];
+        for v in gone {
+            replaced[v as usize] = true;
+        }
+        out.items
+            .retain(|it| !matches!(it, Item::Vertex(v) if replaced[v.idx()]));
+    }
+    (out, stats)
+}
+
+/// One record for each corner of a coincident pair (see the module's
+/// notes): each corner of the kept face that its removed twin lacks is
+/// matched with the twin's nearest corner within `tol` that the kept face
+/// lacks. Either the kept face's corners take the twin's records, or the
+/// twin's neighbours take the kept face's, whichever leaves the faces that
+/// move flatter; neither where both would bend a face by more than half
+/// of `eps` off its plane. Applied to every face not removed and every
+/// wire; a face that falls to a segment is marked removed. Returns the
+/// records replaced.
+fn snap_onto_removed(
+    m: &mut Model,
+    pairs: &[(FaceId, FaceId)],
+    removed: &mut [bool],
+    eps: f64,
+    tol: f64,
+) -> Vec<u32> {
+    use std::collections::BTreeMap;
+    // The faces (not removed) that name each vertex.
+    let mut users: Vec<Vec<u32>> = vec![Vec::new(); m.vertices.len()];
+    for f in m.top_faces() {
+        if removed[f.idx()] {
+            continue;
+        }
+        for v in m.faces[f.idx()].contours.iter().flatten() {
+            if users[v.idx()].last() != Some(&f.0) {
+                users[v.idx()].push(f.0);
+            }
+        }
+    }
+    // How far off its plane the worst face naming a vertex of `moved`
+    // would be, with those vertices at their new places.
+    let bend = |moved: &BTreeMap<u32, DVec3>| -> f64 {
+        let mut faces: Vec<u32> = moved
+            .keys()
+            .flat_map(|&v| users[v as usize].iter().copied())
+            .collect();
+        faces.sort_unstable();
+        faces.dedup();
+        faces
+            .into_iter()
+            .map(|f| {
+                let pts: Vec<Vec<DVec3>> = m.faces[f as usize]
+                    .contours
+                    .iter()
+                    .map(|c| {
+                        c.iter()
+                            .map(|v| moved.get(&v.0).copied().unwrap_or_else(|| m.pos(*v)))
+                            .collect()
+                    })
+                    .collect();
+                geom::Plane::face_deviation(&pts).map_or(0.0, |(d, _)| d)
+            })
+            .fold(0.0, f64::max)
+    };
+    // (record replaced, record kept) links.
+    let mut links: Vec<(u32, u32)> = Vec::new();
+    for &(gone, kept) in pairs {
+        let theirs: Vec<ug::VertexId> = m.faces[gone.idx()].contours.concat();
+        let ours: Vec<ug::VertexId> = m.faces[kept.idx()].contours.concat();
+        let mut matched: Vec<(u32, u32)> = Vec::new();
+        for &w in &ours {
+            if theirs.contains(&w) {
+                continue;
+            }
+            let best = theirs
+                .iter()
+                .filter(|u| !ours.contains(u))
+                .map(|&u| (m.pos(u).distance(m.pos(w)), u))
+                .filter(|&(d, _)| d <= tol)
+                .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.0.cmp(&b.1.0)));
+            if let Some((_, u)) = best {
+                matched.push((w.0, u.0));
+            }
+        }
+        if matched.is_empty() {
+            continue;
+        }
+        let at = |v: u32| m.pos(ug::VertexId(v));
+        let onto_theirs: BTreeMap<u32, DVec3> = matched.iter().map(|&(w, u)| (w, at(u))).collect();
+        let onto_ours: BTreeMap<u32, DVec3> = matched.iter().map(|&(w, u)| (u, at(w))).collect();
+        let (a, b) = (bend(&onto_theirs), bend(&onto_ours));
+        if a.min(b) > 0.5 * eps {
+            continue;
+        }
+        if a <= b {
+            links.extend(matched.iter().copied());
+        } else {
+            links.extend(matched.iter().map(|&(w, u)| (u, w)));
+        }
+    }
+    if links.is_empty() {
+        return Vec::new();
+    }
+    // The links' classes, each named by one record: a replaced record
+    // joins its partner's class (links that disagree, from pairs sharing
+    // corners, just join one class). Vertex → its class's record.
+    let classes = |links: &[(u32, u32)]| -> BTreeMap<u32, u32> {
+        let mut parent: BTreeMap<u32, u32> = BTreeMap::new();
+        fn find(p: &mut BTreeMap<u32, u32>, v: u32) -> u32 {
+            let mut r = v;
+            while let Some(&q) = p.get(&r) {
+                r = q;
+            }
+            r
+        }
+        for &(w, u) in links {
+            let (rw, ru) = (find(&mut parent, w), find(&mut parent, u));
+            if rw != ru {
+                parent.insert(rw, ru);
+            }
+        }
+        let keys: Vec<u32> = parent.keys().copied().collect();
+        keys.into_iter()
+            .map(|v| (v, find(&mut parent, v)))
+            .collect()
+    };
+    let mut to = classes(&links);
+    let resolve = |to: &BTreeMap<u32, u32>, v: u32| -> u32 { to.get(&v).copied().unwrap_or(v) };
+    // A contour whose replaced corners fall together loses the repeats
+    // (an edge shorter than the tolerance: a sliver beside the pair); one
+    // that would come to pass a vertex twice elsewhere keeps its records,
+    // until no such replacement is left.
+    let squeeze = |c: &[ug::VertexId], to: &BTreeMap<u32, u32>| -> Vec<u32> {
+        let mut out: Vec<u32> = c.iter().map(|v| resolve(to, v.0)).collect();
+        out.dedup();
+        while out.len() > 1 && out.first() == out.last() {
+            out.pop();
+        }
+        out
+    };
+    loop {
+        let mut veto: Vec<u32> = Vec::new();
+        for (k, f) in m.faces.iter().enumerate() {
+            if removed.get(k).copied().unwrap_or(false) {
+                continue;
+            }
+            for c in &f.contours {
+                let distinct = |mut a: Vec<u32>| {
+                    a.sort_unstable();
+                    a.dedup();
+                    a.len()
+                };
+                let after = squeeze(c, &to);
+                let repeats_after = after.len() - distinct(after.clone());
+                let repeats_before = c.len() - distinct(c.iter().map(|v| v.0).collect());
+                if repeats_after > repeats_before {
+                    veto.extend(c.iter().map(|v| v.0));
+                }
+            }
+        }
+        if veto.is_empty() {
+            break;
+        }
+        veto.sort_unstable();
+        links.retain(|(w, u)| veto.binary_search(w).is_err() && veto.binary_search(u).is_err());
+        to = classes(&links);
+    }
+    for (k, f) in m.faces.iter_mut().enumerate() {
+        if removed.get(k).copied().unwrap_or(false) {
+            continue;
+        }
+        let mut contours: Vec<Vec<ug::VertexId>> = f
+            .contours
+            .iter()
+            .map(|c| squeeze(c, &to).into_iter().map(ug::VertexId).collect())
+            .collect();
+        // A sliver narrower than the tolerance may fall to a segment: it goes.
+        if contours.first().is_none_or(|c| c.len() < 3) {
+            removed[k] = true;
+            continue;
+        }
+        contours.retain(|c| c.len() >= 3);
+        f.contours = contours;
+    }
+    for w in &mut m.wires {
+        for v in w.polylines.iter_mut().flatten() {
+            v.0 = resolve(&to, v.0);
+        }
+    }
+    to.keys().copied().collect()
 }
 
 /// The model without the faces marked in `removed` (indexed by `FaceId`),
