@@ -6,7 +6,8 @@
 //! walls, vaults of twisted quads, columns with a displaced vertex, flush
 //! panels and hanging light boxes, several storeys, random flips, duplicate
 //! faces, vertex jitter; every fifth seed exported as triangles on vertex
-//! records of their own, as STL does), over 200 seeds, and 40 more placed as CAD
+//! records of their own, as STL does; a wing whose plan is sheared by an
+//! arbitrary angle and a pitched roof with gables on others), over 200 seeds, and 40 more placed as CAD
 //! exports place buildings on a site (turned, in millimetres, half a
 //! million and four million units from the origin):
 //!
@@ -32,13 +33,18 @@ use ug::Model;
 
 /// The size of seed `s`'s building: one room on one storey, every fourth
 /// seed two storeys, every eighth two rooms a storey; every fifth exported
-/// as triangles. (`UG_CAD=X,Y,S` sets rooms along x and y and storeys for
-/// every seed, and `UG_TRIANGLES=1` exports every seed as triangles: for
-/// [`more_seeds`] by hand.)
+/// as triangles; every third with an oblique wing and every third (another
+/// third, and every sixth of the wings) with a pitched roof.
+/// (`UG_CAD=X,Y,S` sets rooms along x and y and storeys for every seed,
+/// `UG_TRIANGLES=1` exports every seed as triangles, and `UG_OBLIQUE=1`
+/// gives every seed the wing and the roof: for [`more_seeds`] by hand.)
 fn config(seed: u64) -> Cad {
     let cfg = size(seed);
+    let env = |k: &str| std::env::var(k).is_ok_and(|v| v == "1");
     Cad {
-        triangles: seed % 5 == 2 || std::env::var("UG_TRIANGLES").is_ok_and(|v| v == "1"),
+        triangles: seed % 5 == 2 || env("UG_TRIANGLES"),
+        wing: seed % 3 == 1 || env("UG_OBLIQUE"),
+        pitched: seed % 3 == 2 || seed % 6 == 1 || env("UG_OBLIQUE"),
         ..cfg
     }
 }

@@ -11,7 +11,8 @@ Examples:
   ugbuilding --faces 10000 --messy | ugplanar | ugflip | ugvlmerge | ugcut -l 1 | ugrad --max-shots 100
   ugbuilding --cad --faces 8600 --storeys 2 -o house.ug   drawn as CAD exports it (slabs, wall runs, openings, ...)
   ugbuilding --cad --rooms 2 --storeys 3 --seed 5         a small three-storey one
-  ugbuilding --cad --faces 2000 --triangles                exported as triangles (STL-like)";
+  ugbuilding --cad --faces 2000 --triangles                exported as triangles (STL-like)
+  ugbuilding --cad --rooms 3 --wing --pitched --seed 4    an oblique wing and a pitched roof";
 
 /// Generate a CAD-like building as UniGrafix: a grid of 4 × 5 × 3 rooms
 /// (metres) with floors of 2 × 2 quads, walls of a lower and an upper face,
@@ -59,6 +60,16 @@ struct Args {
     /// fanned from its first vertex.
     #[arg(long, requires = "cad")]
     triangles: bool,
+    /// Add a one-storey wing to the --cad building's +x facade, its plan
+    /// sheared by an arbitrary angle (2–50°), so that its walls and slabs
+    /// meet the facade and each other obliquely.
+    #[arg(long, requires = "cad")]
+    wing: bool,
+    /// Put a pitched roof on the --cad building: sloped box slabs meeting
+    /// past the ridge, overhanging eaves crossing the top slab's edge, and
+    /// gable walls running into the roof.
+    #[arg(long, requires = "cad")]
+    pitched: bool,
     /// Seed of the random choices.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -150,6 +161,8 @@ fn main() -> std::process::ExitCode {
                 cfg.furniture = v as usize;
             }
             cfg.triangles = args.triangles;
+            cfg.wing = args.wing;
+            cfg.pitched = args.pitched;
             let model = building::cad(&cfg, args.seed);
             c.verbose(format!(
                 "{} storeys of {} × {} rooms, {} faces, {} vertices; seed {}",

@@ -94,6 +94,15 @@ pub struct Cad {
     /// the other diagonal. A face that is not convex in its plane keeps
     /// its contour (on fresh vertex records too).
     pub triangles: bool,
+    /// A one-storey wing on the +x facade, its plan sheared by an
+    /// arbitrary angle: side walls, slabs and contents meet the facade and
+    /// each other obliquely, the wing's walls and slabs run into the
+    /// facade wall and the main slabs.
+    pub wing: bool,
+    /// A pitched roof on the top slab: two sloped box slabs meeting past
+    /// the ridge, eaves overhanging the walls and crossing the top slab's
+    /// edge, and gable walls whose slanted edges run into the roof.
+    pub pitched: bool,
 }
 
 impl Default for Cad {
@@ -115,6 +124,8 @@ impl Default for Cad {
             extras: true,
             panels: 0.5,
             triangles: false,
+            wing: false,
+            pitched: false,
         }
     }
 }
@@ -156,6 +167,8 @@ mod stream {
     pub const DUPLICATES: u64 = 105;
     pub const FLIPPED: u64 = 106;
     pub const JITTER: u64 = 107;
+    pub const WING: u64 = 108;
+    pub const ROOF: u64 = 109;
 }
 
 struct B {
@@ -182,6 +195,7 @@ struct Mats {
     panel: MaterialId,
     light: MaterialId,
     lamp: MaterialId,
+    attic: MaterialId,
 }
 
 impl B {
@@ -265,6 +279,44 @@ impl B {
         };
         self.solid(name, std::array::from_fn(corner), mats);
     }
+
+    /// A prism facing outward: the planar polygon `base` swept by `off`
+    /// (not in its plane); the base and the top take `ends`, the sides
+    /// `sides`.
+    fn prism(
+        &mut self,
+        name: &str,
+        base: &[DVec3],
+        off: DVec3,
+        ends: MaterialId,
+        sides: MaterialId,
+    ) {
+        let mut p = base.to_vec();
+        if geom::newell_normal(&p).dot(off) > 0.0 {
+            p.reverse();
+        }
+        let n = p.len();
+        let lo: Vec<VertexId> = (0..n)
+            .map(|k| self.v(format!("{name}.v{k}"), p[k]))
+            .collect();
+        let hi: Vec<VertexId> = (0..n)
+            .map(|k| self.v(format!("{name}.w{k}"), p[k] + off))
+            .collect();
+        self.f(format!("{name}.0"), lo.clone(), ends);
+        self.f(
+            format!("{name}.1"),
+            hi.iter().rev().copied().collect(),
+            ends,
+        );
+        for i in 0..n {
+            let j = (i + 1) % n;
+            self.f(
+                format!("{name}.{}", i + 2),
+                vec![lo[j], lo[i], hi[i], hi[j]],
+                sides,
+            );
+        }
+    }
 }
 
 fn rgb(m: &mut Model, name: &str, c: [f64; 3]) -> MaterialId {
@@ -323,6 +375,7 @@ pub fn cad(cfg: &Cad, seed: u64) -> Model {
         panel: emitter(&mut m, "panel", [EMISSION, EMISSION, 0.9 * EMISSION]),
         light: emitter(&mut m, "light", [EMISSION, 0.9 * EMISSION, 0.7 * EMISSION]),
         lamp: rgb(&mut m, "lamp", [0.6, 0.6, 0.6]),
+        attic: rgb(&mut m, "attic", [0.55, 0.45, 0.35]),
     };
     let mut b = B { m, mats };
 
@@ -498,6 +551,20 @@ pub fn cad(cfg: &Cad, seed: u64) -> Model {
     for room in &rooms {
         room_contents(&mut b, cfg, room, &mut rr, &mut rf);
     }
+    if cfg.wing {
+        let mut rw = Rng::new(seed, stream::WING);
+        wing(&mut b, cfg, (nx, ny), (x1, y0, y1), &mut rw, seed);
+    }
+    if cfg.pitched {
+        let mut rp = Rng::new(seed, stream::ROOF);
+        pitched_roof(
+            &mut b,
+            DVec2::new(x0, y0),
+            DVec2::new(x1, y1),
+            ns as f64 * STOREY,
+            &mut rp,
+        );
+    }
 
     // Duplicates, flips, jitter.
     let faces = b.m.faces.len();
@@ -617,6 +684,163 @@ fn triangles(m: &Model) -> Model {
         }
     }
     out
+}
+
+/// The wing (see [`Cad::wing`]): drawn as a one-room storey in its own
+/// frame (`u` out of the facade at `x = x1`, `v` along it, `z`), then
+/// sheared by the wing's angle: `(x, y) = (x1 + u, yb + v + u·tan θ)`.
+/// A shear keeps planes planar, so every face stays as flat as drawn.
+fn wing(
+    b: &mut B,
+    cfg: &Cad,
+    grid: (usize, usize),
+    facade: (f64, f64, f64),
+    r: &mut Rng,
+    seed: u64,
+) {
+    let (x1, y0, y1) = facade;
+    let first = b.m.vertices.len();
+    let t = WALL_OUT;
+    let len = r.range(3.5, 6.0);
+    let width = r.range(3.0, 5.0).min(y1 - y0 - 0.8).max(1.5);
+    let yb = r.range(y0 + 0.4, (y1 - 0.4 - width).max(y0 + 0.4));
+    // Now and then nearly square to the facade (slivers along the
+    // junctions), else well off it; either way.
+    let deg = if r.unit() < 0.25 {
+        r.range(2.0, 8.0)
+    } else {
+        r.range(15.0, 50.0)
+    };
+    let k = (if r.unit() < 0.5 { -deg } else { deg }).to_radians().tan();
+    let zc = STOREY - SLAB;
+    let (wall, facade_mat, slab) = (b.mats.wall, b.mats.facade, b.mats.slab);
+    let side = |b: &mut B, n: &str, lo: DVec3, hi: DVec3, out_minus: bool, across: bool| {
+        // A wall box; the facade material outside.
+        let (m_lo, m_hi) = if out_minus {
+            (facade_mat, wall)
+        } else {
+            (wall, facade_mat)
+        };
+        let m = if across {
+            [wall, wall, wall, m_hi, wall, m_lo]
+        } else {
+            [wall, wall, m_lo, wall, m_hi, wall]
+        };
+        b.aabb(n, lo, hi, m);
+    };
+    // Side walls run into the facade wall (0.25 thick behind u = 0).
+    let (sink, top) = (r.range(0.0, 0.03), zc + r.range(0.0, 0.03));
+    for (j, v) in [0.0, width].into_iter().enumerate() {
+        let pen = r.range(0.05, 0.2);
+        side(
+            b,
+            &format!("wing{j}"),
+            DVec3::new(-pen, v - t / 2.0, -sink),
+            DVec3::new(len + t / 2.0 + r.range(0.0, 0.05), v + t / 2.0, top),
+            j == 0,
+            false,
+        );
+    }
+    let over = r.range(0.0, 0.05);
+    side(
+        b,
+        "wing2",
+        DVec3::new(len - t / 2.0, -t / 2.0 - over, -sink),
+        DVec3::new(len + t / 2.0, width + t / 2.0 + over, top),
+        false,
+        true,
+    );
+    // The floor and roof slabs, overlapping the main slabs' edges.
+    let back = r.range(0.0, 0.3);
+    let (lo, hi) = (
+        DVec2::new(-back, -t / 2.0),
+        DVec2::new(len + t / 2.0, width + t / 2.0),
+    );
+    b.aabb(
+        "wingslab0",
+        DVec3::new(lo.x, lo.y, -SLAB),
+        DVec3::new(hi.x, hi.y, 0.0),
+        [slab, b.mats.floor, slab, slab, slab, slab],
+    );
+    b.aabb(
+        "wingslab1",
+        DVec3::new(lo.x, lo.y, zc),
+        DVec3::new(hi.x, hi.y, STOREY),
+        [b.mats.ceiling, b.mats.roof, slab, slab, slab, slab],
+    );
+    // Its room, furnished and lit as the others.
+    let room = Room {
+        s: 0,
+        i: grid.0,
+        j: grid.1,
+        ilo: DVec2::new(0.0, t / 2.0),
+        ihi: DVec2::new(len - t / 2.0, width - t / 2.0),
+    };
+    let mut rr = Rng::new(seed, stream::WING + 100);
+    let mut rf = Rng::new(seed, stream::WING + 200);
+    room_contents(b, cfg, &room, &mut rr, &mut rf);
+    for v in &mut b.m.vertices[first..] {
+        let p = v.pos;
+        v.pos = DVec3::new(x1 + p.x, yb + p.y + p.x * k, p.z);
+    }
+}
+
+/// The pitched roof (see [`Cad::pitched`]) on a top slab of footprint
+/// `lo`–`hi` whose top is at `ztop`; the ridge runs along the longer side.
+fn pitched_roof(b: &mut B, lo: DVec2, hi: DVec2, ztop: f64, r: &mut Rng) {
+    let along_y = hi.y - lo.y >= hi.x - lo.x;
+    // (a across the ridge, b along it) → world; a rotation either way.
+    let (a0, a1, b0, b1) = if along_y {
+        (lo.x, hi.x, lo.y, hi.y)
+    } else {
+        (lo.y, hi.y, lo.x, hi.x)
+    };
+    let w = |a: f64, bb: f64, z: f64| {
+        if along_y {
+            DVec3::new(a, bb, z)
+        } else {
+            DVec3::new(bb, lo.y + hi.y - a, z)
+        }
+    };
+    let pitch = r.range(20.0, 40.0).to_radians();
+    let slope = pitch.tan();
+    let thick = 0.2 / pitch.cos();
+    let (eave, gable) = (r.range(0.3, 0.6), r.range(0.2, 0.4));
+    let sink = r.range(0.03, 0.08);
+    let am = 0.5 * (a0 + a1);
+    let past = r.range(0.1, 0.25);
+    // The underside meets the wall line `sink` below the top slab's top.
+    let zb = ztop - sink - eave * slope;
+    let (roof, attic, slab) = (b.mats.roof, b.mats.attic, b.mats.slab);
+    let under_l = |a: f64| zb + (a - (a0 - eave)) * slope;
+    let under_r = |a: f64| zb + (a1 + eave - a) * slope;
+    for (n, (aa, ab), under) in [
+        (
+            "roofl",
+            (a0 - eave, am + past),
+            &under_l as &dyn Fn(f64) -> f64,
+        ),
+        ("roofr", (am - past, a1 + eave), &under_r),
+    ] {
+        let c: [DVec3; 8] = std::array::from_fn(|k| {
+            let a = if k & 1 == 0 { aa } else { ab };
+            let bb = if k & 2 == 0 { b0 - gable } else { b1 + gable };
+            w(a, bb, under(a) + if k & 4 == 0 { 0.0 } else { thick })
+        });
+        b.solid(n, c, [attic, roof, slab, slab, slab, slab]);
+    }
+    // Gables on the outer walls, sunk 2 cm into the top slab, their
+    // slanted edges 1–8 cm into the roof.
+    let apex = under_l(am) + 0.05;
+    for (n, bb) in [("gable0", b0), ("gable1", b1 - WALL_OUT)] {
+        let base = [
+            w(a0, bb, ztop - 0.02),
+            w(a1, bb, ztop - 0.02),
+            w(am, bb, apex),
+        ];
+        let off = w(a0, bb + WALL_OUT, 0.0) - w(a0, bb, 0.0);
+        b.prism(n, &base, off, b.mats.facade, slab);
+    }
 }
 
 fn room_contents(b: &mut B, cfg: &Cad, room: &Room, rr: &mut Rng, rf: &mut Rng) {

@@ -399,3 +399,73 @@ fn the_triangle_export_fans_every_convex_face_on_its_own_vertices() {
         );
     }
 }
+
+/// `--wing` and `--pitched`: the wing's and the roof's solids are closed,
+/// outward and planar (a shear and a slope keep planes planar), the wing's
+/// side walls run at an angle to the facade, the roof slopes at 20–40°,
+/// and the gables reach into the roof slabs.
+#[test]
+fn the_wing_and_the_pitched_roof_are_closed_planar_solids_at_an_angle() {
+    for seed in 1..=8 {
+        let cfg = Cad {
+            jitter: 0.0,
+            flipped: 0.0,
+            duplicates: 0.0,
+            wing: true,
+            pitched: true,
+            ..Cad::default()
+        };
+        let m = cad(&cfg, seed);
+        let mut solids: HashMap<&str, Vec<&Face>> = HashMap::new();
+        for f in &m.faces {
+            let name = f.name.as_deref().unwrap();
+            let solid = name.split('.').next().unwrap();
+            if [
+                "wing0",
+                "wing1",
+                "wing2",
+                "wingslab0",
+                "wingslab1",
+                "roofl",
+                "roofr",
+                "gable0",
+                "gable1",
+            ]
+            .contains(&solid)
+            {
+                solids.entry(solid).or_default().push(f);
+            }
+        }
+        assert_eq!(solids.len(), 9, "seed {seed}");
+        let normal = |f: &Face| {
+            let p: Vec<DVec3> = f.contours[0].iter().map(|&v| m.pos(v)).collect();
+            geom::newell_normal(&p).normalize()
+        };
+        for (name, faces) in &solids {
+            let mut vol = 0.0;
+            for f in faces {
+                let p: Vec<DVec3> = f.contours[0].iter().map(|&v| m.pos(v)).collect();
+                let n = normal(f);
+                for q in &p {
+                    assert!((q - p[0]).dot(n).abs() < 1e-9, "{name} not planar");
+                }
+                for i in 1..p.len() - 1 {
+                    vol += p[0].dot(p[i].cross(p[i + 1])) / 6.0;
+                }
+            }
+            assert!(vol > 0.0, "seed {seed}: {name} faces inward");
+        }
+        // The side walls' long faces are off every axis in plan.
+        let side = normal(solids["wing0"][2]);
+        assert!(
+            side.z.abs() < 1e-12 && side.x.abs() > 0.03 && side.y.abs() > 0.03,
+            "seed {seed}: {side}"
+        );
+        // The roof's top slopes at 20–40°.
+        let top = normal(solids["roofl"][1]);
+        let pitch = top.z.acos().to_degrees();
+        assert!((20.0..=40.0).contains(&pitch), "seed {seed}: pitch {pitch}");
+        let r = check(&m);
+        assert!(r.count("intersect") > 0);
+    }
+}
