@@ -360,9 +360,10 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
     }
     let p0 = (n2.cross(u) * a.plane.d + u.cross(n1) * b.plane.d) / uu;
     let dir = u / uu.sqrt();
-    // Each boundary event: where along the line, and the point itself.
-    // An edge's crossing is computed from the edge with its end points in
-    // one order, so the faces that share the edge find the same point.
+    // Each boundary event: where along the line, and the point: an edge's
+    // crossing of the other plane itself, computed from the edge with its
+    // end points in one order, so the faces that share the edge find the
+    // same point.
     let mut ev: Vec<(f64, DVec3)> = Vec::new();
     for (g, other, edges) in [(a, b, &ea), (b, a, &eb)] {
         for &(ci, i) in edges {
@@ -374,7 +375,12 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
                 snap(other.plane.dist(q), eps),
             );
             if dp == 0.0 {
-                ev.push(((p - p0).dot(dir), p));
+                // A vertex within epsilon of the other plane: its foot on
+                // the line (where two faces meet at a shallow angle, the
+                // line is several epsilons along the face from a vertex
+                // only an epsilon off the plane).
+                let t = (p - p0).dot(dir);
+                ev.push((t, p0 + dir * t));
             } else if dp * dq < 0.0 {
                 let (p, q, dp, dq) = if p.to_array() <= q.to_array() {
                     (p, q, dp, dq)
@@ -398,12 +404,15 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
 /// Where two faces that are not coplanar cut each other: the segments of
 /// the line where their planes meet that lie in both (closed) faces and in
 /// the interior of at least one, in 3-D, ordered along the line. A segment
-/// ends at the boundary event itself (a face's vertex on the other's
-/// plane, or an edge's crossing of it), not at its projection on the line:
-/// the planes of faces that are planar only within epsilon (a long, thin
-/// end face of a slab, jittered) meet in slightly different lines, and the
-/// faces sharing an edge then found its crossing of a third face's plane
-/// at points up to a few epsilons apart, which became a needle. Where a
+/// that ends where an edge crosses the other face's plane ends at that
+/// crossing itself, not at its projection on the line: the planes of faces
+/// that are planar only within epsilon (a long, thin end face of a slab,
+/// jittered) meet in slightly different lines, and the faces sharing an
+/// edge then found its crossing of a third face's plane at points up to a
+/// few epsilons apart, which became a needle. (A vertex within epsilon of
+/// the other plane still ends a segment at its foot on the line: where the
+/// faces meet at a shallow angle, the line lies several epsilons along the
+/// face from it, and the face must be cut there.) Where a
 /// face only rests on the other's boundary (edge on edge) there is no cut.
 /// Where they meet at a single point inside one of them (a tip resting on a
 /// face), a cut of 4 `eps` along the line through the point stands for it.
