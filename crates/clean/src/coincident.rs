@@ -266,6 +266,68 @@ fn snap_onto_removed(
             })
             .fold(0.0, f64::max)
     };
+    // Whether moving the vertices of `moved` makes a face that names one
+    // cross a face it did not cross (checked in the neighbourhood only).
+    let geom_of = |f: u32, moved: &BTreeMap<u32, DVec3>| -> Option<geom::intersect::FaceGeom> {
+        geom::intersect::FaceGeom::new(
+            m.faces[f as usize]
+                .contours
+                .iter()
+                .map(|c| {
+                    c.iter()
+                        .map(|v| moved.get(&v.0).copied().unwrap_or_else(|| m.pos(*v)))
+                        .collect()
+                })
+                .collect(),
+        )
+    };
+    let index = std::cell::OnceCell::new();
+    let crossing = |moved: &BTreeMap<u32, DVec3>| -> Vec<u32> {
+        let index = index.get_or_init(|| {
+            geom::BoxIndex::new(m.top_faces().filter(|f| !removed[f.idx()]).map(|f| {
+                let (lo, hi) = geom::index::bbox(
+                    m.faces[f.idx()]
+                        .contours
+                        .iter()
+                        .flatten()
+                        .map(|&v| m.pos(v)),
+                    tol,
+                );
+                (lo, hi, f.0)
+            }))
+        });
+        let mut faces: Vec<u32> = moved
+            .keys()
+            .flat_map(|&v| users[v as usize].iter().copied())
+            .collect();
+        faces.sort_unstable();
+        faces.dedup();
+        let none = BTreeMap::new();
+        let mut bad = Vec::new();
+        for &f in &faces {
+            let (Some(after), Some(before)) = (geom_of(f, moved), geom_of(f, &none)) else {
+                continue;
+            };
+            let (lo, hi) = after.bounds();
+            for g in index.query(lo, hi) {
+                if g == f {
+                    continue;
+                }
+                let (Some(g_after), Some(g_before)) = (geom_of(g, moved), geom_of(g, &none)) else {
+                    continue;
+                };
+                use geom::intersect::{Relation, relate};
+                if relate(&after, &g_after, eps) == Relation::Intersect
+                    && relate(&before, &g_before, eps) != Relation::Intersect
+                {
+                    bad.extend([f, g]);
+                }
+            }
+        }
+        bad.sort_unstable();
+        bad.dedup();
+        bad
+    };
     // (record replaced, record kept) links.
     let mut links: Vec<(u32, u32)> = Vec::new();
     for &(gone, kept) in pairs {
@@ -293,13 +355,22 @@ fn snap_onto_removed(
         let onto_theirs: BTreeMap<u32, DVec3> = matched.iter().map(|&(w, u)| (w, at(u))).collect();
         let onto_ours: BTreeMap<u32, DVec3> = matched.iter().map(|&(w, u)| (u, at(w))).collect();
         let (a, b) = (bend(&onto_theirs), bend(&onto_ours));
-        if a.min(b) > 0.5 * eps {
-            continue;
-        }
-        if a <= b {
-            links.extend(matched.iter().copied());
+        // The flatter way first; a way that makes two faces cross is not
+        // taken.
+        let ways = if a <= b {
+            [(a, &onto_theirs, true), (b, &onto_ours, false)]
         } else {
-            links.extend(matched.iter().map(|&(w, u)| (u, w)));
+            [(b, &onto_ours, false), (a, &onto_theirs, true)]
+        };
+        if let Some(&(_, _, kept_moves)) = ways
+            .iter()
+            .find(|(d, moved, _)| *d <= 0.5 * eps && crossing(moved).is_empty())
+        {
+            if kept_moves {
+                links.extend(matched.iter().copied());
+            } else {
+                links.extend(matched.iter().map(|&(w, u)| (u, w)));
+            }
         }
     }
     if links.is_empty() {
@@ -360,6 +431,18 @@ fn snap_onto_removed(
                 if repeats_after > repeats_before {
                     veto.extend(c.iter().map(|v| v.0));
                 }
+            }
+        }
+        if veto.is_empty() {
+            // All the moves together (pairs that share corners join their
+            // moves) must not make two faces cross either.
+            let moved: BTreeMap<u32, DVec3> = to
+                .iter()
+                .filter(|(v, r)| v != r)
+                .map(|(&v, &r)| (v, m.pos(ug::VertexId(r))))
+                .collect();
+            for f in crossing(&moved) {
+                veto.extend(m.faces[f as usize].contours.iter().flatten().map(|v| v.0));
             }
         }
         if veto.is_empty() {
