@@ -165,7 +165,12 @@ fn one_placed(seed: u64, placed: bool) -> Vec<String> {
     let (cut, _) = clean::isect::isect(&oriented, eps).expect("isect");
     let (copl, _) = clean::copl::copl(&cut, eps).expect("copl");
     let (coincident, _) = clean::coincident::clean(&copl, eps);
-    let report = check::check(&coincident, eps);
+    // (ugclean's last step, the tents, applies with or without the
+    // enclosed faces' removal.)
+    let report = check::check(
+        &clean::group::collapse_tents(coincident.clone(), eps).0,
+        eps,
+    );
     if report.defects() > 0 {
         problems.push(format!(
             "chain to the coincident faces: {}",
@@ -174,6 +179,7 @@ fn one_placed(seed: u64, placed: bool) -> Vec<String> {
     }
     // ugclean's second step, the enclosed faces: still no defect.
     let (cleaned, _) = clean::enclosed::remove(&coincident, eps);
+    let (cleaned, _) = clean::group::collapse_tents(cleaned, eps);
     let report = check::check(&cleaned, eps);
     if report.defects() > 0 {
         problems.push(format!("chain: {}", defects(&report)));

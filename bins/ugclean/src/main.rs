@@ -22,6 +22,10 @@ Examples:
 /// it, the legs of a table below the floor. Rays from each face decide
 /// (see README); emitters, faces seen from outside and closed dark rooms
 /// stay. This changes the area per material; --keep-enclosed keeps them.
+///
+/// Last, a tent's tip (a contour vertex within epsilon of the short chord,
+/// under 2 epsilon, between its neighbours: no mesher covers it without a
+/// sliver, and ugcheck counts it as degenerate) joins its nearer neighbour.
 /// Instances are flattened first.
 #[derive(Parser, Debug)]
 #[command(version, after_help = EXAMPLES)]
@@ -50,6 +54,7 @@ fn main() -> std::process::ExitCode {
         } else {
             clean::enclosed::remove(&out, eps)
         };
+        let (out, tents) = clean::group::collapse_tents(out, eps);
         if c.verbose > 0 {
             eprintln!(
                 "epsilon {eps:e}; {} coincident pairs; removed {} faces, area {}; {} vertex records of kept faces replaced by the removed twins'",
@@ -61,6 +66,7 @@ fn main() -> std::process::ExitCode {
             for (r, k, why) in &st.removed {
                 eprintln!("  removed {r} (kept {k}): {why}");
             }
+            eprintln!("{tents} tents' tips joined to a neighbour");
             if !args.keep_enclosed {
                 eprintln!(
                     "{} enclosed faces removed, area {}",

@@ -511,6 +511,25 @@ fn face_checks(cx: &Ctx<'_>, f: FaceId) -> FaceFindings {
             ));
             break;
         }
+        // A tent: a vertex within epsilon of the short chord between its
+        // neighbours (no mesher covers it without a degenerate triangle;
+        // in a triangle the whole face is measured below).
+        if n >= 4
+            && let Some(i) = (0..n).find(|&i| {
+                let (u, v, w) = (pts[ci][(i + n - 1) % n], pts[ci][i], pts[ci][(i + 1) % n]);
+                winged::weld::is_tent(u, v, w, eps)
+            })
+        {
+            reason = Some(format!(
+                "contour {} has a tent at {} (its neighbours {} and {} are {} apart)",
+                ci + 1,
+                cx.vname(c[i]),
+                cx.vname(c[(i + n - 1) % n]),
+                cx.vname(c[(i + 1) % n]),
+                num(pts[ci][(i + n - 1) % n].distance(pts[ci][(i + 1) % n]))
+            ));
+            break;
+        }
     }
     let (lo, hi) = geom::index::bbox(pts.iter().flatten().copied(), 0.0);
     let size = (hi - lo).length();

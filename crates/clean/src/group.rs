@@ -198,6 +198,58 @@ pub fn vlmerge(model: Model, opts: &Options) -> Result<(Model, Stats), ug::Diagn
     Ok((out, st))
 }
 
+/// Joins every tent's tip to its nearer neighbour
+/// ([`winged::weld::collapse_tents`]: a contour vertex within epsilon of
+/// the chord, under 2 epsilon long, between its neighbours, which `ugcheck`
+/// counts as degenerate and no mesher covers without a sliver), in every
+/// face that uses it, then puts the points that now lie on other faces'
+/// edges into them, and repairs a contour that now passes a vertex twice
+/// ([`settle`]). ugclean's last step, so that the chain writes none.
+/// Returns the model and the tips joined.
+pub fn collapse_tents(model: Model, eps: f64) -> (Model, usize) {
+    let any = model.top_faces().any(|f| {
+        model.faces[f.idx()].contours.iter().any(|c| {
+            let n = c.len();
+            n >= 4
+                && (0..n).any(|i| {
+                    let p = |k: usize| model.pos(c[k % n]);
+                    winged::weld::is_tent(p(i + n - 1), p(i), p(i + 1), eps)
+                })
+        })
+    });
+    if !any {
+        return (model, 0);
+    }
+    // Only the vertices with a statement come back (the mesh gives one to
+    // every vertex of the arena, those removed before included; joining and
+    // splitting make no new vertex).
+    let stated: rustc_hash::FxHashSet<String> = model
+        .top_vertices()
+        .map(|v| model.vertices[v.idx()].name.clone())
+        .collect();
+    let mut mesh = Mesh::from_model(model);
+    let (joined, _) = winged::weld::collapse_tents(&mut mesh, eps);
+    if joined > 0 {
+        split_edges(&mut mesh, eps);
+    }
+    let mut out = mesh.into_model();
+    let keep: Vec<bool> = out
+        .vertices
+        .iter()
+        .map(|v| stated.contains(&v.name))
+        .collect();
+    out.items
+        .retain(|it| !matches!(it, ug::Item::Vertex(v) if !keep[v.idx()]));
+    // A tip joined to a vertex that another contour through it already
+    // passes makes that contour visit it twice: the repair splits it there.
+    if joined > 0
+        && let Ok((settled, _)) = settle(out.clone(), eps)
+    {
+        out = settled;
+    }
+    (out, joined)
+}
+
 /// Makes every face sound before a tool works on the model: [`vlmerge`]
 /// with its repair alone (no welding, no T-vertices, no joining). A
 /// repeated vertex goes, a face with no area (collinear vertices, fewer

@@ -27,6 +27,13 @@ const MAX_SPLIT_PASSES: usize = 16;
 /// longer than `eps`, or an outer contour whose area is at most `eps` times
 /// the face's size. `None` for a sound face.
 pub fn degeneracy(mesh: &Mesh, f: FaceId, eps: f64) -> Option<&'static str> {
+    degeneracy_within(mesh, f, eps, false)
+}
+
+/// [`degeneracy`], with "no area" meaning at most ε² (`ugcheck`'s own
+/// limit for a face's area) when `strict`, instead of `eps` times the
+/// face's size (which also takes a sliver up to about 2 epsilon wide).
+fn degeneracy_within(mesh: &Mesh, f: FaceId, eps: f64, strict: bool) -> Option<&'static str> {
     let pts = mesh.face_points(f);
     if pts.is_empty() {
         return Some("no contour");
@@ -41,7 +48,8 @@ pub fn degeneracy(mesh: &Mesh, f: FaceId, eps: f64) -> Option<&'static str> {
     let size = (hi - lo).length();
     let area = newell_normal(&pts[0]).length() / 2.0;
     // NaN counts as no area.
-    let none = |a: f64| a.partial_cmp(&(eps * size)) != Some(std::cmp::Ordering::Greater);
+    let limit = if strict { eps * eps } else { eps * size };
+    let none = |a: f64| a.partial_cmp(&limit) != Some(std::cmp::Ordering::Greater);
     // A contour whose lobes cancel (a bow-tie: a quad with two corners
     // swapped) has no Newell area but spans a plane: it is not degenerate
     // but self-crossing, and the repair splits it into its lobes.
@@ -172,8 +180,8 @@ pub fn merge_vertices(mesh: &mut Mesh, eps: f64) -> (usize, Vec<(FaceId, String)
 
 /// Replaces every vertex `v` by `rep[v]` in faces and wires and removes
 /// the replaced vertices (when `any`), then drops the faces left without
-/// area (checked on every face). Returns the dropped faces with the
-/// reason, in statement order.
+/// area (checked on every face: see below). Returns the dropped faces with
+/// the reason, in statement order.
 fn apply_merges(
     mesh: &mut Mesh,
     order: &[VertexId],
@@ -183,12 +191,14 @@ fn apply_merges(
 ) -> Vec<(FaceId, String)> {
     let faces: Vec<FaceId> = mesh.faces().collect();
     let mut dropped = Vec::new();
+    let mut touched = vec![false; mesh.model().faces.len()];
     if any {
         for &f in &faces {
             let face = mesh.face(f);
             if !face.contours.iter().flatten().any(|&v| rep[v.idx()] != v) {
                 continue;
             }
+            touched[f.idx()] = true;
             let contours: Vec<Vec<VertexId>> = face
                 .contours
                 .iter()
@@ -222,9 +232,13 @@ fn apply_merges(
             }
         }
     }
+    // A face the merges changed goes when it is thinner than about 2
+    // epsilon; one they did not, only when it has no area as ugcheck
+    // measures it (a sliver 1–2 epsilon wide that ugcopl's arrangement
+    // made, dropped here, left its neighbours' edges unmatched).
     for &f in &faces {
         if mesh.is_face_live(f)
-            && let Some(reason) = degeneracy(mesh, f, eps)
+            && let Some(reason) = degeneracy_within(mesh, f, eps, !touched[f.idx()])
         {
             mesh.remove_face(f);
             dropped.push((f, reason.to_string()));
@@ -240,6 +254,20 @@ fn apply_merges(
 
 /// A tent's chord is shorter than this many epsilons (see [`collapse_tents`]).
 const TENT_CHORD: f64 = 2.0;
+
+/// Whether contour vertex `v` between neighbours `u` and `w` is a tent
+/// (see [`collapse_tents`]): `u` and `w` less than [`TENT_CHORD`]·`eps`
+/// apart (but not one point), and the triangle `u v w` degenerate as
+/// `ugcheck` measures it: `v` within `eps` of the segment between them,
+/// or the triangle's area at most ε².
+pub fn is_tent(u: DVec3, v: DVec3, w: DVec3, eps: f64) -> bool {
+    let chord = u.distance(w);
+    if !(chord > 0.0 && chord < TENT_CHORD * eps) {
+        return false;
+    }
+    let h = point_segment_distance(v, u, w).0;
+    h <= eps || chord * h / 2.0 <= eps * eps
+}
 
 /// Collapses tents: a contour vertex `v` whose two neighbours `u` and `w`
 /// are less than [`TENT_CHORD`]·`eps` apart, with the triangle `u v w`
@@ -287,14 +315,7 @@ pub fn collapse_tents(mesh: &mut Mesh, eps: f64) -> (usize, Vec<(FaceId, String)
                         continue;
                     }
                     let (pu, pv, pw) = (mesh.pos(u), mesh.pos(v), mesh.pos(w));
-                    let chord = pu.distance(pw);
-                    if !(chord > 0.0 && chord < TENT_CHORD * eps) {
-                        continue;
-                    }
-                    // The triangle u v w degenerate as ugcheck measures
-                    // it: narrower than epsilon, or of area at most ε².
-                    let h = point_segment_distance(pv, pu, pw).0;
-                    if !(h <= eps || chord * h / 2.0 <= eps * eps) {
+                    if !is_tent(pu, pv, pw, eps) {
                         continue;
                     }
                     let (du, dw) = (pv.distance(pu), pv.distance(pw));
