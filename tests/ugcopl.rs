@@ -336,3 +336,36 @@ fn a_face_two_epsilon_in_front_of_another_is_resolved_for_every_cut() {
         assert_eq!(defects(&r), 0, "after ugcut -l {len}: {r}");
     }
 }
+
+/// A wall face coincident with a slab's side piece but for one corner 1.02
+/// epsilon off the slab's (fixtures/copl/sliver-piece-beside-a-coincident-face.ug,
+/// from the property's seed 297, a triangle export with an oblique wing):
+/// ugcopl cuts the wall face into the common part and a sliver 1.02
+/// epsilon wide, and keeps the sliver (the weld after the cut once dropped
+/// it as having no area, which left the wall's neighbours with unmatched
+/// edges: one more inconsistent edge than the two coincident faces have).
+#[test]
+fn a_sliver_piece_wider_than_epsilon_is_kept() {
+    let src =
+        std::fs::read_to_string(fixture("copl/sliver-piece-beside-a-coincident-face.ug")).unwrap();
+    let eps = ["-e", "1.299893e-5"];
+    let check_eps = |text: &str| -> serde_json::Value {
+        let args: Vec<&str> = ["--json"].iter().chain(&eps).copied().collect();
+        serde_json::from_str(&run_ok("ugcheck", &args, Some(text.as_bytes()))).unwrap()
+    };
+    let out = run_ok("ugcopl", &eps, Some(src.as_bytes()));
+    assert!(
+        out.contains(
+            "f s0w1r1.3.t1.i2.c1 (s0w1r0.0.t1.1 s0w1r1.0.t1.iv155 slab0.3.t1.iv46) facade;"
+        ),
+        "{out}"
+    );
+    let (before, after) = (check_eps(&src), check_eps(&out));
+    assert_eq!(
+        count(&before, "inconsistent"),
+        4,
+        "the coincident pair's own edges"
+    );
+    assert_eq!(count(&after, "inconsistent"), 4, "{out}");
+    assert_eq!(count(&after, "degenerate"), 0, "{out}");
+}
