@@ -241,9 +241,20 @@ fn snap_onto_removed(
             }
         }
     }
-    // How far off its plane the worst face naming a vertex of `moved`
-    // would be, with those vertices at their new places.
-    let bend = |moved: &BTreeMap<u32, DVec3>| -> f64 {
+    // A face's contours with the vertices of `moved` at their new places.
+    let points = |f: u32, moved: &BTreeMap<u32, DVec3>| -> Vec<Vec<DVec3>> {
+        m.faces[f as usize]
+            .contours
+            .iter()
+            .map(|c| {
+                c.iter()
+                    .map(|v| moved.get(&v.0).copied().unwrap_or_else(|| m.pos(*v)))
+                    .collect()
+            })
+            .collect()
+    };
+    // The faces (not removed) that name a vertex of `moved`.
+    let affected = |moved: &BTreeMap<u32, DVec3>| -> Vec<u32> {
         let mut faces: Vec<u32> = moved
             .keys()
             .flat_map(|&v| users[v as usize].iter().copied())
@@ -251,35 +262,19 @@ fn snap_onto_removed(
         faces.sort_unstable();
         faces.dedup();
         faces
+    };
+    // How far off its plane the worst face naming a vertex of `moved`
+    // would be, with those vertices at their new places.
+    let bend = |moved: &BTreeMap<u32, DVec3>| -> f64 {
+        affected(moved)
             .into_iter()
-            .map(|f| {
-                let pts: Vec<Vec<DVec3>> = m.faces[f as usize]
-                    .contours
-                    .iter()
-                    .map(|c| {
-                        c.iter()
-                            .map(|v| moved.get(&v.0).copied().unwrap_or_else(|| m.pos(*v)))
-                            .collect()
-                    })
-                    .collect();
-                geom::Plane::face_deviation(&pts).map_or(0.0, |(d, _)| d)
-            })
+            .map(|f| geom::Plane::face_deviation(&points(f, moved)).map_or(0.0, |(d, _)| d))
             .fold(0.0, f64::max)
     };
     // Whether moving the vertices of `moved` makes a face that names one
     // cross a face it did not cross (checked in the neighbourhood only).
     let geom_of = |f: u32, moved: &BTreeMap<u32, DVec3>| -> Option<geom::intersect::FaceGeom> {
-        geom::intersect::FaceGeom::new(
-            m.faces[f as usize]
-                .contours
-                .iter()
-                .map(|c| {
-                    c.iter()
-                        .map(|v| moved.get(&v.0).copied().unwrap_or_else(|| m.pos(*v)))
-                        .collect()
-                })
-                .collect(),
-        )
+        geom::intersect::FaceGeom::new(points(f, moved))
     };
     let index = std::cell::OnceCell::new();
     let crossing = |moved: &BTreeMap<u32, DVec3>| -> Vec<u32> {
@@ -296,15 +291,9 @@ fn snap_onto_removed(
                 (lo, hi, f.0)
             }))
         });
-        let mut faces: Vec<u32> = moved
-            .keys()
-            .flat_map(|&v| users[v as usize].iter().copied())
-            .collect();
-        faces.sort_unstable();
-        faces.dedup();
         let none = BTreeMap::new();
         let mut bad = Vec::new();
-        for &f in &faces {
+        for f in affected(moved) {
             let (Some(after), Some(before)) = (geom_of(f, moved), geom_of(f, &none)) else {
                 continue;
             };
