@@ -415,3 +415,33 @@ fn a_tents_tip_joins_a_neighbour() {
         assert!((a - b).abs() <= 1e-4 * a, "{m}: {a} -> {b}");
     }
 }
+
+/// A coincident pair's corners 1.01 epsilon apart joined into one record
+/// (fixtures/clean/joined-corner-on-an-edge.ug, from property seed 22 on 3 × 2
+/// rooms, a triangle export with an oblique wing): the face beside them
+/// came to have a corner 2.4e-7 from one of its own edges, narrower than
+/// epsilon, until ugclean repaired the faces after joining.
+#[test]
+fn a_join_that_puts_a_corner_on_an_edge_is_repaired() {
+    let src = std::fs::read_to_string(fixture("clean/joined-corner-on-an-edge.ug")).unwrap();
+    let eps = "2.2780725453821576e-5";
+    let out = run_ok(
+        "ugclean",
+        &["--keep-enclosed", "-e", eps],
+        Some(src.as_bytes()),
+    );
+    let r: serde_json::Value = serde_json::from_str(&run_ok(
+        "ugcheck",
+        &["--json", "-e", eps],
+        Some(out.as_bytes()),
+    ))
+    .unwrap();
+    assert!(
+        !out.contains("slab0.1.t1.i102.c3"),
+        "the floor piece goes:\n{out}"
+    );
+    // (Four faces cut out of a model: their open edges are no concern.)
+    for key in ["degenerate", "intersecting", "tvertices"] {
+        assert_eq!(r[key].as_array().unwrap().len(), 0, "{key}:\n{out}");
+    }
+}

@@ -220,34 +220,54 @@ pub fn collapse_tents(model: Model, eps: f64) -> (Model, usize) {
     if !any {
         return (model, 0);
     }
-    // Only the vertices with a statement come back (the mesh gives one to
-    // every vertex of the arena, those removed before included; joining and
-    // splitting make no new vertex).
-    let stated: rustc_hash::FxHashSet<String> = model
-        .top_vertices()
-        .map(|v| model.vertices[v.idx()].name.clone())
-        .collect();
+    let stated = stated_names(&model);
     let mut mesh = Mesh::from_model(model);
     let (joined, _) = winged::weld::collapse_tents(&mut mesh, eps);
     if joined > 0 {
         split_edges(&mut mesh, eps);
     }
     let mut out = mesh.into_model();
-    let keep: Vec<bool> = out
+    keep_stated(&mut out, &stated);
+    // A tip joined to a vertex that another contour through it already
+    // passes makes that contour visit it twice: the repair splits it there.
+    if joined > 0 {
+        out = settle_stated(out, eps);
+    }
+    (out, joined)
+}
+
+/// The names of the vertices that have a statement.
+fn stated_names(m: &Model) -> rustc_hash::FxHashSet<String> {
+    m.top_vertices()
+        .map(|v| m.vertices[v.idx()].name.clone())
+        .collect()
+}
+
+/// Drops the statements of vertices not named in `stated`. A winged mesh
+/// gives a statement to every vertex of a model's arena, those whose
+/// statements were removed before (vertices only removed faces used)
+/// included; joining, splitting and repairing make no new vertex.
+fn keep_stated(m: &mut Model, stated: &rustc_hash::FxHashSet<String>) {
+    let keep: Vec<bool> = m
         .vertices
         .iter()
         .map(|v| stated.contains(&v.name))
         .collect();
-    out.items
+    m.items
         .retain(|it| !matches!(it, ug::Item::Vertex(v) if !keep[v.idx()]));
-    // A tip joined to a vertex that another contour through it already
-    // passes makes that contour visit it twice: the repair splits it there.
-    if joined > 0
-        && let Ok((settled, _)) = settle(out.clone(), eps)
-    {
-        out = settled;
+}
+
+/// [`settle`] on a model whose arena may hold vertices without a
+/// statement, which stay without one; on an error, the model as it was.
+pub fn settle_stated(model: Model, eps: f64) -> Model {
+    let stated = stated_names(&model);
+    match settle(model.clone(), eps) {
+        Ok((mut out, _)) => {
+            keep_stated(&mut out, &stated);
+            out
+        }
+        Err(_) => model,
     }
-    (out, joined)
 }
 
 /// Makes every face sound before a tool works on the model: [`vlmerge`]
