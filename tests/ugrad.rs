@@ -519,6 +519,57 @@ fn the_tail_agrees_with_shooting_patch_by_patch_on_the_cornell_box() {
     assert_ne!(s, t);
 }
 
+/// In one furnished room every patch sees most others: far from a
+/// receiver the tail's patches shoot in clusters (`--tail-far`), which
+/// must store far fewer pairs and light the room as every patch alone
+/// does (per material within 1%; measured against ugprobe in
+/// docs/decisions.md, "The tail's far field shoots in clusters").
+#[test]
+fn far_clusters_light_a_room_as_its_patches_do() {
+    let input = building(
+        &[
+            "--rooms",
+            "1",
+            "--lights",
+            "--furniture",
+            "3",
+            "--seed",
+            "1",
+        ],
+        "3%",
+    );
+    let pairs = |log: &str| -> usize {
+        log.split(" pairs stored")
+            .next()
+            .and_then(|t| t.rsplit('(').next())
+            .and_then(|t| t.parse().ok())
+            .unwrap_or_else(|| panic!("no pairs figure in {log}"))
+    };
+    let grouped = run("ugrad", &["-v", "--visibility", "ray"], Some(&input));
+    let alone = run(
+        "ugrad",
+        &["-v", "--visibility", "ray", "--tail-far", "0"],
+        Some(&input),
+    );
+    assert!(grouped.status.success() && alone.status.success());
+    let (lg, la) = (
+        String::from_utf8_lossy(&grouped.stderr),
+        String::from_utf8_lossy(&alone.stderr),
+    );
+    assert!(
+        lg.contains("far-field clusters") && !la.contains("far-field clusters"),
+        "{lg}"
+    );
+    let (pg, pa) = (pairs(&lg), pairs(&la));
+    assert!(pg * 3 < pa, "{pg} pairs against {pa}");
+    let (g, a) = (
+        means(&ug::parse(&grouped.stdout, "grouped").unwrap().model),
+        means(&ug::parse(&alone.stdout, "alone").unwrap().model),
+    );
+    assert_close(&a, &g, 0.01);
+    assert_ne!(a, g);
+}
+
 /// `-v` gives the set-up and final statistics, `-vv` also a line per shot.
 #[test]
 fn shot_lines_only_with_vv() {

@@ -125,6 +125,13 @@ struct Args {
     /// many vertices as the patch corners that gathered it (0: never).
     #[arg(long, default_value_t = 1.0, value_name = "FRACTION", value_parser = cli::parse_epsilon)]
     tail_refine: f64,
+    /// In the indirect tail, a cluster of one surface's patches shoots as
+    /// one (the exact form factor of its outline, visibility from up to
+    /// four of its patches) at receivers at least 1/R of its radius away;
+    /// rows then grow with the log of the patches a point sees, not their
+    /// number (0: every patch shoots alone).
+    #[arg(long, default_value_t = radiosity::solver::TAIL_FAR, value_name = "R", value_parser = cli::parse_epsilon)]
+    tail_far: f64,
     /// How visibility is decided. auto: the hemi-cube on a hardware GPU,
     /// else ray casting (on a software rasteriser such as lavapipe the CPU
     /// ray caster is faster).
@@ -344,6 +351,7 @@ fn main() -> std::process::ExitCode {
             tail: args.tail,
             tail_rays: args.tail_rays,
             tail_refine: args.tail_refine,
+            tail_far: args.tail_far,
             regather: !args.no_regather,
             shape: !args.uniform_shooters,
             cull_res: args.cull_res,
@@ -432,10 +440,11 @@ fn main() -> std::process::ExitCode {
                 solver.mesh.num_patches(),
                 t.pairs,
                 t.bytes as f64 / 1e6,
-                if t.rays == 0 {
-                    "every patch tried".to_string()
-                } else {
-                    format!("{} rays per point", t.rays)
+                match (t.rays, t.clusters) {
+                    (0, 0) => "every patch tried".to_string(),
+                    (0, k) => format!("every patch tried, {k} far-field clusters"),
+                    (r, 0) => format!("{r} rays per point"),
+                    (r, k) => format!("{r} rays per point, {k} far-field clusters"),
                 },
                 t.iterations,
                 t.unshot_before,

@@ -233,9 +233,61 @@ pub fn contour_integral(x: DVec3, n: DVec3, poly: &[DVec3]) -> f64 {
     (sum / (2.0 * std::f64::consts::PI)).abs()
 }
 
+/// [`contour_integral`] over a set of directed edges (`pts` indices)
+/// that bound a region of one plane: the union of polygons, with the edges
+/// they share (walked once each way) left out. Edges that do not cancel
+/// (a T-junction: one polygon's edge along two of another's) still add up,
+/// for the terms of collinear pieces sum to the whole edge's. The region
+/// must lie in the receiver's front half-space.
+pub fn edges_integral(x: DVec3, n: DVec3, pts: &[DVec3], edges: &[[u32; 2]]) -> f64 {
+    let mut sum = 0.0;
+    for &[i, j] in edges {
+        let a = pts[i as usize] - x;
+        let b = pts[j as usize] - x;
+        let c = a.cross(b);
+        let cl = c.length();
+        if cl == 0.0 {
+            continue;
+        }
+        sum += cl.atan2(a.dot(b)) * n.dot(c) / cl;
+    }
+    (sum / (2.0 * std::f64::consts::PI)).abs()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An L of three unit squares given by its six outer edges has the
+    /// squares' summed form factor; so does its outline with one edge cut
+    /// in two (a T-junction).
+    #[test]
+    fn edges_of_a_union_give_its_form_factor() {
+        let p = |x: f64, y: f64| DVec3::new(x, y, 1.0);
+        let squares = [
+            [p(0., 0.), p(1., 0.), p(1., 1.), p(0., 1.)],
+            [p(1., 0.), p(2., 0.), p(2., 1.), p(1., 1.)],
+            [p(0., 1.), p(1., 1.), p(1., 2.), p(0., 2.)],
+        ];
+        let (x, n) = (
+            DVec3::new(0.3, -0.4, -0.5),
+            DVec3::new(0.1, 0.2, 1.0).normalize(),
+        );
+        let sum: f64 = squares.iter().map(|s| contour_integral(x, n, s)).sum();
+        let pts = vec![
+            p(0., 0.),
+            p(2., 0.),
+            p(2., 1.),
+            p(1., 1.),
+            p(1., 2.),
+            p(0., 2.),
+            p(1.5, 1.),
+        ];
+        let outline: Vec<[u32; 2]> = (0..6).map(|i| [i, (i + 1) % 6]).collect();
+        assert!(rel(edges_integral(x, n, &pts, &outline), sum) < 1e-12);
+        let cut: Vec<[u32; 2]> = [[0, 1], [1, 2], [2, 6], [6, 3], [3, 4], [4, 5], [5, 0]].to_vec();
+        assert!(rel(edges_integral(x, n, &pts, &cut), sum) < 1e-12);
+    }
 
     fn square(z: f64) -> Vec<DVec3> {
         vec![

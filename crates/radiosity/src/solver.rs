@@ -222,6 +222,10 @@ pub struct Options {
     /// reflected light is steep and gather it exactly at the new vertices:
     /// each at most this many times the patch corners' gather (0: never).
     pub tail_refine: f64,
+    /// In the tail, a cluster of a surface's patches shoots as one at a
+    /// receiver at least 1/`tail_far` of its radius away (`tail.rs`; 0:
+    /// every patch shoots alone).
+    pub tail_far: f64,
     /// Give a vertex made by refinement its exact irradiance from every
     /// earlier shot (re-shooting them at it) instead of the mean of its
     /// parents' (§6's rule). The mean is wrong wherever earlier light was
@@ -263,6 +267,7 @@ impl Default for Options {
             tail: 5e-3,
             tail_rays: None,
             tail_refine: 1.0,
+            tail_far: TAIL_FAR,
             regather: true,
             cull_res: 128,
             cull_targets: 20_000,
@@ -317,6 +322,8 @@ pub struct TailStats {
     pub pairs: usize,
     /// Rays per receiving point that found its patches (0: every patch tried).
     pub rays: usize,
+    /// Far-field clusters of patches.
+    pub clusters: usize,
     /// Jacobi iterations (all patches shooting at once).
     pub iterations: usize,
     /// Unshot energy (fraction of the emitted) before and after.
@@ -351,6 +358,9 @@ enum TailEnd {
 /// See [`Solver::check_tail_interpolation`].
 const TAIL_CHECK: f64 = 0.005;
 const TAIL_ITERATIONS: usize = 10_000;
+/// The tail's far-field clusters: radius at most this share of the
+/// distance to the receiver (see `tail.rs`).
+pub const TAIL_FAR: f64 = 0.25;
 
 /// A progressive radiosity solution in progress.
 pub struct Solver<'v> {
@@ -1120,6 +1130,7 @@ impl<'v> Solver<'v> {
             &self.mesh,
             self.opts.offset,
             self.opts.tail_rays,
+            self.opts.tail_far,
             &cancel,
         ) else {
             self.tail = Some(TailStats {
@@ -1130,6 +1141,7 @@ impl<'v> Solver<'v> {
             return TailEnd::Stopped(stopped(&interrupt));
         };
         let rays = tr.rays();
+        let clusters = tr.clusters();
         let build_seconds = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
         let area: Vec<f64> = self
@@ -1181,6 +1193,7 @@ impl<'v> Solver<'v> {
                 break TailEnd::Stopped(stopped(&interrupt));
             }
             let mut dh = tr.gather(&u);
+
             if iterations == 0
                 && let Some(t) = &tshape
             {
@@ -1212,6 +1225,8 @@ impl<'v> Solver<'v> {
         };
         let iterate_seconds = t1.elapsed().as_secs_f64();
         let (pairs, bytes) = (tr.pairs(), tr.heap_bytes());
+        // What the patches shot, and its mean over each cluster.
+        let shot_b = tr.node_values(&shot_b);
         // The picture: every patch corner gathers once what the patches shot.
         let t2 = Instant::now();
         tr.compact_rows();
@@ -1244,6 +1259,7 @@ impl<'v> Solver<'v> {
             return TailEnd::Stopped(stopped(&interrupt));
         };
         let corner_seconds = t2.elapsed().as_secs_f64();
+
         // A split quad patch's centre vertex takes the irradiance its patch
         // centre received (a fifth sample: between the corners the field is
         // not bilinear, e.g. brighter at a wall's foot than mid-floor).
@@ -1356,6 +1372,7 @@ impl<'v> Solver<'v> {
             receivers,
             pairs,
             rays,
+            clusters,
             iterations,
             unshot_before: before,
             unshot_after: remaining,
@@ -1386,7 +1403,7 @@ impl<'v> Solver<'v> {
     fn check_tail_interpolation(
         &mut self,
         tr: &crate::tail::Transport,
-        shot_b: &[Rgb],
+        shot_b: &crate::tail::NodeLight,
         tshape: Option<&TailShape>,
         t_all: &mut [Rgb],
         centre_of: &rustc_hash::FxHashMap<u32, u32>,
@@ -1503,7 +1520,7 @@ impl<'v> Solver<'v> {
     fn refine_tail(
         &mut self,
         tr: &crate::tail::Transport,
-        shot_b: &[Rgb],
+        shot_b: &crate::tail::NodeLight,
         tshape: Option<&TailShape>,
         t_all: &mut Vec<Rgb>,
         budget: usize,
