@@ -57,26 +57,25 @@
 //!   binary tree (split at the median centre along the longest axis). A
 //!   cluster shoots as one at a receiver at least 1/`far` of its radius
 //!   away (`ugrad --tail-far`, 0.25 by default: a cluster then subtends at
-//!   most about 30°), when its patches fill at least `MIN_FILL` of their
-//!   convex hull: its form factor is the exact one of the hull times that
-//!   share (on a grid of patches the hull is their union, and the contour
-//!   integrals add up: the same number). Its visibility is the share of
-//!   its quarters' (its grandchildren's) point form factors whose sample
-//!   patch (the one nearest the quarter's centre) sends a clear ray to the
-//!   receiver. Its radiosity is its seen quarters' weighted by those point
-//!   form factors, each quarter's area mean tilted by its first moment
-//!   towards the side the receiver weights more ([`NodeLight`]): with the
-//!   cluster's area mean alone a furnished room's tail came out 2.7% dark
-//!   (the near side of a cluster weighs more, and is also nearer the lamp
-//!   and the room's middle); now within 0.1% of every patch alone, the
-//!   light it receives equal to what it shoots as before. A row's
-//!   candidates are raised to their highest
-//!   ancestor far from the receiver, a cluster too near is opened, and no
-//!   node of a row lies inside another. A row then grows with the log of
-//!   the patches a point sees, not their number: in one room of 21,202
-//!   patches (the Cornell box at `-l 1%`) the stored rows went from
-//!   210 million pairs (1.7 GB) to 3.2 million, the solve from 390 s to
-//!   30 s; every patch alone (`--tail-far 0`) gives the former bytes.
+//!   most about 30°) and wholly on one side of the receiver's plane. Its
+//!   form factor is exact: the contour integral over its outline (its
+//!   patches' edges less those two of them share) is their summed form
+//!   factor. Its visibility is the share of its quarters' (its
+//!   grandchildren's) point form factors whose sample patch (the one
+//!   nearest the quarter's centre) sends a clear ray to the receiver. Its
+//!   radiosity is its seen quarters' weighted by those shares, each
+//!   quarter's area mean tilted by its first moment towards the side the
+//!   receiver weights more ([`NodeLight`]): with the cluster's area mean
+//!   alone a furnished room's tail came out 2.7% dark (the near side of a
+//!   cluster weighs more, and is also nearer the lamp and the room's
+//!   middle). A row's candidates are raised to their highest such
+//!   ancestor, a cluster that is not such is opened, and no node of a row
+//!   lies inside another. A row then grows with the log of the patches a
+//!   point sees, not their number: in one room of 21,202 patches (the
+//!   Cornell box at `-l 1%`) the stored rows went from 210 million pairs
+//!   (1.7 GB) to 5.3 million, the solve from 390 s to 49 s; every patch
+//!   alone (`--tail-far 0`) gives the former bytes (docs/decisions.md,
+//!   "The tail's far field shoots in clusters").
 //! * **Which patches a patch centre sees** is found by casting `rays`
 //!   cosine-distributed rays from it (stratified, jittered by a hash of the
 //!   receiver: deterministic); for each surface hit, its patches within the
