@@ -3462,12 +3462,12 @@ fn tail_cells(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::RayVisibility;
 
     /// A UG text cut into patches of edge `len` (ugcut's mesher), and its mesh.
-    fn patched(src: &str, len: f64) -> (ug::Model, Mesh) {
+    pub(crate) fn patched(src: &str, len: f64) -> (ug::Model, Mesh) {
         let model = ug::parse(src.as_bytes(), "t").unwrap().model;
         let opts = libmesh::patch::Options {
             len,

@@ -1134,7 +1134,8 @@ struct Clusters {
     hull: Vec<DVec3>,
     /// The clusters' outlines, as indices into the transport's `pts`.
     edges: Vec<[u32; 2]>,
-    /// Per entry of `pts`, the first entry at the same mesh vertex.
+    /// Per entry of `pts`, the first entry at the same mesh vertex (while
+    /// the outlines are built).
     canon: Vec<u32>,
     /// Per node, its parent (`NONE` at a root).
     parent: Vec<u32>,
@@ -1211,6 +1212,7 @@ impl Clusters {
             let root = cl.subtree(&mut members, shooters, pts, &area, &frame);
             cl.roots.push(root.node);
         }
+        cl.canon = Vec::new();
         cl
     }
 
@@ -1717,15 +1719,7 @@ mod tests {
 
     /// A UG text cut into patches of edge `len`, as a mesh.
     fn mesh(src: &str, len: f64) -> Mesh {
-        let model = ug::parse(src.as_bytes(), "t").unwrap().model;
-        let opts = libmesh::patch::Options {
-            len,
-            eps: 1e-9,
-            angle: 25.0,
-            quads: true,
-        };
-        let model = libmesh::patch::cut(&model, opts).unwrap().0;
-        Mesh::from_model(&model, 1e-9).unwrap()
+        crate::solver::tests::patched(src, len).1
     }
 
     fn transport(m: &Mesh, far: f64) -> Transport {
