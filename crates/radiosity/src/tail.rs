@@ -198,9 +198,12 @@ pub(crate) struct Transport {
     start: Vec<usize>,
     patch: Vec<u32>,
     weight: Vec<f32>,
-    /// Per stored pair whose shooter is a cluster, the shares of its
-    /// quarters ([`Transport::cluster_weight`]).
+    /// Per stored pair whose shooter is a cluster, in row order, the
+    /// shares of its quarters ([`Transport::cluster_weight`]).
     vis: Vec<Shares>,
+    /// Row `q`'s cluster pairs' shares start at `vis[vis_start[q]]` (in
+    /// the row's order; pairs whose shooter is a patch have none).
+    vis_start: Vec<u32>,
     /// Per patch, the patches of its surface sharing a corner with it
     /// (itself included), sorted: `near[near_start[p]..near_start[p + 1]]`.
     near_start: Vec<u32>,
@@ -281,6 +284,7 @@ impl Transport {
             patch: Vec::new(),
             weight: Vec::new(),
             vis: Vec::new(),
+            vis_start: vec![0],
             near_start,
             near,
             seen_start: Vec::new(),
@@ -343,15 +347,19 @@ impl Transport {
                 for (p, w, m) in r {
                     tr.patch.push(p);
                     tr.weight.push(w);
-                    tr.vis.push(m);
+                    if p as usize >= np {
+                        tr.vis.push(m);
+                    }
                 }
                 tr.start.push(tr.patch.len());
+                tr.vis_start.push(tr.vis.len() as u32);
             }
             q0 = q1;
         }
         tr.patch.shrink_to_fit();
         tr.weight.shrink_to_fit();
         tr.vis.shrink_to_fit();
+        tr.vis_start.shrink_to_fit();
         Some(tr)
     }
 
@@ -727,11 +735,15 @@ impl Transport {
             .map(|q| {
                 let mut h = [0.0; 3];
                 let sh = &self.shooters[q];
+                let mut shares = self.vis[self.vis_start[q] as usize..].iter();
                 for k in self.start[q]..self.start[q + 1] {
                     let w = self.weight[k] as f64;
                     let p = self.patch[k];
                     let b = match self.clusters.get(p) {
-                        Some(c) => self.clusters.light(u, c, sh.centre, sh.normal, self.vis[k]),
+                        Some(c) => {
+                            let m = *shares.next().expect("a cluster pair's shares");
+                            self.clusters.light(u, c, sh.centre, sh.normal, m)
+                        }
                         None => u.mean[p as usize],
                     };
                     h[0] += w * b[0];
@@ -875,6 +887,7 @@ impl Transport {
         self.patch = Vec::new();
         self.weight = Vec::new();
         self.vis = Vec::new();
+        self.vis_start = Vec::new();
     }
 
     /// Mesh vertex `v` as a receiver (see [`Transport::at`]), and the
@@ -1030,6 +1043,7 @@ impl Transport {
             + self.patch.capacity() * 4
             + self.weight.capacity() * 4
             + self.vis.capacity() * 4
+            + self.vis_start.capacity() * 4
             + self.shooters.capacity() * size_of::<Shooter>()
             + self.pts.capacity() * size_of::<DVec3>()
             + self.surf.capacity() * 4
