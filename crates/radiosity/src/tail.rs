@@ -633,9 +633,9 @@ impl Transport {
         // ones cost as much again, and gave the same answers).
         let surf = &self.surf;
         let (mut all, mut seen) = (0.0, [0.0; 4]);
-        let k = c.nsamples as usize;
-        for ((seen, &q), &sample) in seen.iter_mut().zip(&c.quarters[..k]).zip(&c.samples[..k]) {
-            let omega = self.clusters.point_ff(q, c.normal, x, n);
+        let ns = c.nsamples as usize;
+        for ((seen, &q), &sample) in seen.iter_mut().zip(&c.quarters[..ns]).zip(&c.samples[..ns]) {
+            let omega = self.clusters.point_ff(q, c.normal, x, n, &self.shooters);
             if omega <= 0.0 {
                 continue;
             }
@@ -729,7 +729,7 @@ impl Transport {
 
     /// Irradiance added at each patch centre by patches of unshot radiosity `u`.
     pub fn gather(&self, u: &[Rgb]) -> Vec<Rgb> {
-        let u = &self.clusters.values(u);
+        let u = &self.clusters.values(u, &self.shooters);
         (0..self.shooters.len())
             .into_par_iter()
             .map(|q| {
@@ -1024,7 +1024,7 @@ impl Transport {
     /// Per node (patch, then cluster), the area-weighted mean of `b` (per
     /// patch): what [`Transport::at`] and [`Transport::corners`] take.
     pub fn node_values(&self, b: &[Rgb]) -> NodeLight {
-        self.clusters.values(b)
+        self.clusters.values(b, &self.shooters)
     }
 
     /// Clusters of patches that may shoot as one.
@@ -1062,7 +1062,6 @@ impl Transport {
                 + self.clusters.reps.capacity())
                 * 4
             + self.clusters.patch_area.capacity() * 8
-            + self.clusters.patch_centre.capacity() * 24
     }
 }
 
@@ -1155,11 +1154,11 @@ struct Clusters {
     parent: Vec<u32>,
     /// Per surface with patches, its root.
     roots: Vec<u32>,
-    /// Per cluster, the patch whose centre is nearest its centre.
+    /// Per cluster, the patch whose centre is nearest its centre (while
+    /// the tree is built: its grandparent's samples).
     reps: Vec<u32>,
-    /// Per patch, its area and centre.
+    /// Per patch, its area.
     patch_area: Vec<f64>,
-    patch_centre: Vec<DVec3>,
 }
 
 /// What [`Clusters::subtree`] returns about a subtree.
@@ -1186,7 +1185,6 @@ impl Clusters {
             roots: Vec::new(),
             reps: Vec::new(),
             patch_area: Vec::new(),
-            patch_centre: shooters.iter().map(|s| s.centre).collect(),
         };
         let mut by_surface: Vec<(u32, u32)> = shooters
             .iter()
@@ -1199,11 +1197,7 @@ impl Clusters {
             cl.roots = (0..np as u32).collect();
             return cl;
         }
-        let poly = |p: u32| {
-            let s = &shooters[p as usize];
-            &pts[s.first as usize..(s.first + s.n) as usize]
-        };
-        let area: Vec<f64> = (0..np as u32).map(|p| polygon_area(poly(p))).collect();
+        let area: Vec<f64> = mesh.patches().map(|p| mesh.patch_area(p)).collect();
         cl.patch_area = area.clone();
         // Each corner as the first entry of `pts` at its mesh vertex, so
         // that an edge two patches share is the same pair of indices.
@@ -1227,6 +1221,7 @@ impl Clusters {
             cl.roots.push(root.node);
         }
         cl.canon = Vec::new();
+        cl.reps = Vec::new();
         cl
     }
 
@@ -1286,7 +1281,7 @@ impl Clusters {
         both.extend_from_slice(&b.hull);
         let edges = outline(&a.edges, &b.edges);
         let hull = convex_hull(both);
-        let hull_area = polygon_area_2d(&hull);
+        let hull_area = geom::polygon::signed_area_2d(&hull).abs();
         let members: &[u32] = members;
         let rep = *members
             .iter()
@@ -1427,10 +1422,10 @@ impl Clusters {
 
     /// Node `k`'s area and centre as a point source's form factor (up to
     /// π) at `x` (normal `n`); `m`: the node's plane normal.
-    fn point_ff(&self, k: u32, m: DVec3, x: DVec3, n: DVec3) -> f64 {
+    fn point_ff(&self, k: u32, m: DVec3, x: DVec3, n: DVec3, shooters: &[Shooter]) -> f64 {
         let (a, y) = match self.get(k) {
             Some(c) => (c.area, c.centre),
-            None => (self.patch_area[k as usize], self.patch_centre[k as usize]),
+            None => (self.patch_area[k as usize], shooters[k as usize].centre),
         };
         let d = x - y;
         let d2 = d.length_squared();
@@ -1458,7 +1453,7 @@ impl Clusters {
 
     /// Per node, the area-weighted mean of `b` (per patch) over it, and
     /// per cluster its first moment about its centre.
-    fn values(&self, b: &[Rgb]) -> NodeLight {
+    fn values(&self, b: &[Rgb], shooters: &[Shooter]) -> NodeLight {
         let np = self.np;
         let mut mean = Vec::with_capacity(np + self.list.len());
         mean.extend_from_slice(&b[..np]);
@@ -1466,7 +1461,7 @@ impl Clusters {
         let mut sum: Vec<[DVec3; 3]> = Vec::with_capacity(self.list.len());
         let own = |k: usize, sum: &[[DVec3; 3]]| -> [DVec3; 3] {
             if k < np {
-                let (a, x) = (self.patch_area[k], self.patch_centre[k]);
+                let (a, x) = (self.patch_area[k], shooters[k].centre);
                 b[k].map(|v| x * (a * v))
             } else {
                 sum[k - np]
@@ -1555,23 +1550,6 @@ impl Clusters {
         }
         out
     }
-}
-
-/// The area of a planar polygon (Newell's normal).
-fn polygon_area(p: &[DVec3]) -> f64 {
-    let mut n = DVec3::ZERO;
-    for i in 0..p.len() {
-        n += p[i].cross(p[(i + 1) % p.len()]);
-    }
-    0.5 * n.length()
-}
-
-fn polygon_area_2d(p: &[glam::DVec2]) -> f64 {
-    let mut a = 0.0;
-    for i in 0..p.len() {
-        a += p[i].perp_dot(p[(i + 1) % p.len()]);
-    }
-    0.5 * a.abs()
 }
 
 /// The convex hull of `pts`, counter-clockwise, without collinear points
