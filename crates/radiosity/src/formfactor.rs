@@ -100,6 +100,90 @@ impl Cell {
         let k = self.n as usize;
         self.s[..k].iter().map(|&v| f64::from(v)).sum::<f64>() / k as f64
     }
+    /// Whether [`shaped_form_factor`] cuts the cell for a receiver at
+    /// `x`: it is larger than its distance from `x`.
+    fn cut_for(&self, x: DVec3) -> bool {
+        self.diameter2() > self.centroid().distance_squared(x)
+    }
+
+    /// The cell's quarter points (the images of (¼, ¼) from each corner:
+    /// the centres of its four children) and, per quarter point, the
+    /// weights of the corners' values there (linear over a triangle,
+    /// bilinear over a quad).
+    fn quarter_points(&self) -> ([DVec3; 4], [[f64; 4]; 4]) {
+        let p = &self.pts;
+        let k = self.n as usize;
+        let mut w = [[0.0; 4]; 4];
+        for (i, wi) in w.iter_mut().enumerate().take(k) {
+            if k == 3 {
+                *wi = [1.0 / 6.0; 4];
+                wi[i] = 4.0 / 6.0;
+                wi[3] = 0.0;
+            } else {
+                *wi = [1.0 / 16.0; 4];
+                wi[i] = 9.0 / 16.0;
+                wi[(i + 1) % 4] = 3.0 / 16.0;
+                wi[(i + 3) % 4] = 3.0 / 16.0;
+            }
+        }
+        let q = w.map(|wi| (0..k).map(|j| p[j] * wi[j]).sum::<DVec3>());
+        (q, w)
+    }
+
+    /// The point form factor's density from `x` (normal `n`) at each
+    /// quarter point, as shares of their sum (`None` where it vanishes or
+    /// a quarter point is `x`).
+    fn quarter_shares(&self, x: DVec3, n: DVec3, q: &[DVec3; 4]) -> Option<[f64; 4]> {
+        let p = &self.pts;
+        let m = (p[1] - p[0]).cross(p[2] - p[0]);
+        let mut out = [0.0; 4];
+        let mut sum = 0.0;
+        for (o, &qi) in out.iter_mut().zip(q).take(self.n as usize) {
+            let d = qi - x;
+            let d2 = d.length_squared();
+            if d2 <= 0.0 {
+                return None;
+            }
+            *o = n.dot(d).max(0.0) * m.dot(d).abs() / (d2 * d2);
+            sum += *o;
+        }
+        (sum > 0.0 && sum.is_finite()).then(|| out.map(|v| v / sum))
+    }
+
+    /// The cell's radiosity where a receiver at `x` (normal `n`) weighs
+    /// it: its values at the quarter points weighted by the form factor's
+    /// density there (to second order the radiosity at the form factor's
+    /// centroid over the cell, where the mean of the corners is only first
+    /// order). The mean where the density vanishes at every quarter point.
+    fn weighted_mean(&self, x: DVec3, n: DVec3) -> f64 {
+        let (q, w) = self.quarter_points();
+        let Some(share) = self.quarter_shares(x, n, &q) else {
+            return self.mean();
+        };
+        let k = self.n as usize;
+        let mut m = 0.0;
+        for i in 0..k {
+            m += share[i] * (0..k).map(|j| w[i][j] * f64::from(self.s[j])).sum::<f64>();
+        }
+        m
+    }
+
+    /// [`Cell::weighted_mean`] of this cell's values and of `b`'s (the
+    /// same cell with other values), the weights shared.
+    fn weighted_means(&self, b: &Cell, x: DVec3, n: DVec3) -> (f64, f64) {
+        let (q, w) = self.quarter_points();
+        let Some(share) = self.quarter_shares(x, n, &q) else {
+            return (self.mean(), b.mean());
+        };
+        let k = self.n as usize;
+        let (mut ma, mut mb) = (0.0, 0.0);
+        for i in 0..k {
+            ma += share[i] * (0..k).map(|j| w[i][j] * f64::from(self.s[j])).sum::<f64>();
+            mb += share[i] * (0..k).map(|j| w[i][j] * f64::from(b.s[j])).sum::<f64>();
+        }
+        (ma, mb)
+    }
+
     fn diameter2(&self) -> f64 {
         let k = self.n as usize;
         let mut d: f64 = 0.0;
@@ -153,19 +237,26 @@ impl Cell {
 /// light of the cells' parts closest to it dominates (a point on a
 /// concave junction sees the adjacent face's light at the junction line
 /// over half its hemisphere, whatever the face's size), so a cell larger
-/// than half its distance from `x` is cut in four, at most `depth` times,
-/// and each part is taken at its mean. Far from `x` this is the mean
+/// than its distance from `x` is cut in four, at most `depth` times. Each
+/// part's exact form factor is weighted by its radiosity where the form
+/// factor puts it ([`Cell::weighted_mean`]). Far from `x` this is the mean
 /// radiosity times the form factor.
+///
+/// (Cutting cells larger than half their distance and taking each part
+/// at its mean cost a quarter of the 8.6k building's solve; this gives
+/// the tail 7% faster and nearer a reference cut four times as finely,
+/// a mean difference over the vertices of 0.008% against 0.010%, the
+/// largest 1.3% against 6.4%: docs/performance.md.)
 pub fn shaped_form_factor(x: DVec3, n: DVec3, cells: &[Cell], depth: u32) -> f64 {
     fn one(x: DVec3, n: DVec3, c: &Cell, depth: u32, buf: &mut Vec<DVec3>) -> f64 {
-        if depth > 0 && c.diameter2() > 0.25 * c.centroid().distance_squared(x) {
+        if depth > 0 && c.cut_for(x) {
             return c
                 .children()
                 .iter()
                 .map(|k| one(x, n, k, depth - 1, buf))
                 .sum();
         }
-        let m = c.mean();
+        let m = c.weighted_mean(x, n);
         if m == 0.0 {
             return 0.0;
         }
@@ -188,14 +279,14 @@ pub fn shaped_form_factor_pair(
     depth: u32,
 ) -> (f64, f64) {
     fn one(x: DVec3, n: DVec3, a: &Cell, b: &Cell, depth: u32, buf: &mut Vec<DVec3>) -> (f64, f64) {
-        if depth > 0 && a.diameter2() > 0.25 * a.centroid().distance_squared(x) {
+        if depth > 0 && a.cut_for(x) {
             let (ka, kb) = (a.children(), b.children());
             return ka.iter().zip(&kb).fold((0.0, 0.0), |acc, (ca, cb)| {
                 let f = one(x, n, ca, cb, depth - 1, buf);
                 (acc.0 + f.0, acc.1 + f.1)
             });
         }
-        let (ma, mb) = (a.mean(), b.mean());
+        let (ma, mb) = a.weighted_means(b, x, n);
         if ma == 0.0 && mb == 0.0 {
             return (0.0, 0.0);
         }
@@ -442,6 +533,79 @@ mod tests {
         let g = shaped_form_factor(x, DVec3::Z, &[t], 12);
         let f = point_to_polygon(x, DVec3::Z, &sq[..3]);
         assert!(g > 0.0 && g < 2.0 * f, "{g} {f}");
+    }
+
+    /// A linearly varying light over a square and a triangle, seen from
+    /// near and far: the cut cells weighted at their quarter points give
+    /// the integral of a 256 × 256 grid of exact parts, each at its
+    /// centre's value. (Each part at its mean, cut while larger than half
+    /// its distance, as before: the square within 0.33–0.70% near, the
+    /// triangle 0.36–0.72% near and 0.10% far; now the square within
+    /// 0.42–0.82% near, the triangle within 0.12% everywhere.)
+    #[test]
+    fn shaped_form_factor_integrates_a_linear_light() {
+        let sq = square(0.0);
+        let light = |p: DVec3| 0.2 + 1.6 * p.x + 0.4 * p.y;
+        let cell = Cell {
+            pts: [sq[0], sq[1], sq[2], sq[3]],
+            s: [sq[0], sq[1], sq[2], sq[3]].map(|p| light(p) as f32),
+            n: 4,
+        };
+        let tri = Cell {
+            pts: [sq[0], sq[1], sq[2], sq[2]],
+            s: [sq[0], sq[1], sq[2], sq[2]].map(|p| light(p) as f32),
+            n: 3,
+        };
+        let grid = 256;
+        let h = 1.0 / grid as f64;
+        for (x, nrm) in [
+            (DVec3::new(0.5, 0.5, -3.0), DVec3::Z),
+            (DVec3::new(0.2, 0.7, -0.3), DVec3::Z),
+            (
+                DVec3::new(0.9, 0.1, -0.05),
+                DVec3::new(0.3, 0.0, 1.0).normalize(),
+            ),
+            (
+                DVec3::new(-0.05, 0.5, -0.05),
+                DVec3::new(1.0, 0.0, 1.0).normalize(),
+            ),
+            (
+                DVec3::new(1.1, 0.4, -0.5),
+                DVec3::new(-1.0, 0.2, 0.5).normalize(),
+            ),
+        ] {
+            let (mut fq, mut ft) = (0.0, 0.0);
+            for i in 0..grid {
+                for j in 0..grid {
+                    let (a, b) = (i as f64 * h, j as f64 * h);
+                    let part = [
+                        DVec3::new(a, b, 0.0),
+                        DVec3::new(a + h, b, 0.0),
+                        DVec3::new(a + h, b + h, 0.0),
+                        DVec3::new(a, b + h, 0.0),
+                    ];
+                    let f = point_to_polygon(x, nrm, &part);
+                    let c = DVec3::new(a + h / 2.0, b + h / 2.0, 0.0);
+                    fq += f * light(c);
+                    // The triangle below the diagonal x = y (a part on it
+                    // counts half).
+                    ft += f
+                        * light(c)
+                        * match i.cmp(&j) {
+                            std::cmp::Ordering::Greater => 1.0,
+                            std::cmp::Ordering::Equal => 0.5,
+                            std::cmp::Ordering::Less => 0.0,
+                        };
+                }
+            }
+            let gq = shaped_form_factor(x, nrm, &[cell], 10);
+            // (Far: to rounding; within a third of the square's size: as
+            // the parts taken at their means, cut twice as finely, were.)
+            let tol = if x.z < -1.0 { 1e-7 } else { 1e-2 };
+            assert!(rel(gq, fq) < tol, "{x}: quad {gq} against {fq}");
+            let gt = shaped_form_factor(x, nrm, &[tri], 10);
+            assert!(rel(gt, ft) < 2e-3, "{x}: triangle {gt} against {ft}");
+        }
     }
 
     #[test]
