@@ -472,7 +472,7 @@ impl Piece {
     fn ff(&self, x: DVec3, n: DVec3) -> f64 {
         match &self.cells {
             Some(cells) if x.distance_squared(self.c) < (NEAR * self.size).powi(2) => {
-                shaped_form_factor(x, n, cells, SHAPE_DEPTH)
+                shaped_form_factor(x, n, &self.poly, cells, SHAPE_DEPTH)
             }
             _ => self.w * point_to_polygon(x, n, &self.poly),
         }
@@ -3332,15 +3332,20 @@ fn tail_shapes<'a>(
                 cache.slots.resize_with(SHAPE_SLOTS, || None);
             }
             let slot = &mut cache.slots[p as usize % SHAPE_SLOTS];
-            if !matches!(slot, Some((q, _, _)) if *q == p) {
+            if !matches!(slot, Some((q, ..)) if *q == p) {
                 let a = tail_cells(mesh, leaf_shot, &t.snap, PatchId(p), t.ubar[p as usize]);
                 let b = rest.and_then(|r| rest_cells(mesh, r, PatchId(p)));
-                *slot = Some((p, a, b));
+                let outline = mesh
+                    .patch_corners(PatchId(p))
+                    .iter()
+                    .map(|&v| mesh.vertex_pos(v))
+                    .collect();
+                *slot = Some((p, a, b, outline));
             }
-            let Some((_, a, b)) = slot.as_ref() else {
+            let Some((_, a, b, outline)) = slot.as_ref() else {
                 unreachable!("the slot was just filled")
             };
-            shaped_pair(x, n, a.as_deref(), b.as_deref())
+            shaped_pair(x, n, outline, a.as_deref(), b.as_deref())
         })
     }
 }
@@ -3352,8 +3357,8 @@ fn tail_shapes<'a>(
 const SHAPE_SLOTS: usize = 256;
 
 /// A patch's cells as [`tail_shapes`] builds them: the first bounce's and
-/// the later bounces'.
-type ShapeSlot = Option<(u32, Option<Vec<Cell>>, Option<Vec<Cell>>)>;
+/// the later bounces', and the patch's polygon.
+type ShapeSlot = Option<(u32, Option<Vec<Cell>>, Option<Vec<Cell>>, Vec<DVec3>)>;
 
 struct ShapeCache {
     /// The [`tail_shapes`] call whose cells the slots hold.
@@ -3379,17 +3384,18 @@ thread_local! {
 fn shaped_pair(
     x: DVec3,
     n: DVec3,
+    outline: &[DVec3],
     a: Option<&[Cell]>,
     b: Option<&[Cell]>,
 ) -> (Option<f64>, Option<f64>) {
     match (a, b) {
         (Some(a), Some(b)) if a.len() == b.len() => {
-            let (fa, fb) = shaped_form_factor_pair(x, n, a, b, SHAPE_DEPTH);
+            let (fa, fb) = shaped_form_factor_pair(x, n, outline, a, b, SHAPE_DEPTH);
             (Some(fa), Some(fb))
         }
         _ => (
-            a.map(|c| shaped_form_factor(x, n, c, SHAPE_DEPTH)),
-            b.map(|c| shaped_form_factor(x, n, c, SHAPE_DEPTH)),
+            a.map(|c| shaped_form_factor(x, n, outline, c, SHAPE_DEPTH)),
+            b.map(|c| shaped_form_factor(x, n, outline, c, SHAPE_DEPTH)),
         ),
     }
 }
