@@ -1869,14 +1869,12 @@ mod tests {
         v a 0 0 0; v b 4 0 0; v c 4 4 0; v d 0 4 0;
         f floor (a b c d) g;";
 
-    /// A far cluster of a grid's patches fills its hull, so its form
-    /// factor is its patches' summed (contour integrals add up): the row
-    /// of a point above a floor of 256 patches is a few dozen nodes with
-    /// the same total; nearer points open more clusters; every patch is
-    /// under exactly one node of every row.
+    /// The walk down the surfaces' trees finds the patches whose boxes
+    /// meet the discovery hits' queries, as a scan of every patch does,
+    /// and raised, the nodes [`Clusters::resolve`] makes of them.
     #[test]
     fn the_tree_walk_finds_the_patches_the_queries_meet() {
-        // A furnished room: a box on the floor, a panel on the wall.
+        // A room with a box on the floor.
         let m = mesh(
             "c_rgb g 0.5 0.5 0.5;
              v a 0 0 0; v b 4 0 0; v c 4 3 0; v d 0 3 0;
@@ -1920,6 +1918,11 @@ mod tests {
         assert!(raised_some > 20, "{raised_some}");
     }
 
+    /// A far cluster of a grid's patches fills its hull, so its form
+    /// factor is its patches' summed (contour integrals add up): the row
+    /// of a point above a floor of 256 patches is a few dozen nodes with
+    /// the same total; nearer points open more clusters; every patch is
+    /// under exactly one node of every row.
     #[test]
     fn far_clusters_shoot_what_their_patches_shoot() {
         let m = mesh(FLOOR, 0.25);
