@@ -560,7 +560,8 @@ impl Transport {
     /// the centres of the patches that share a corner with them. A point
     /// sees, nearly, what the patch centres around it see; this replaces
     /// its discovery rays (three quarters of the tail's time on a 26k-patch
-    /// building).
+    /// building). (What [`Transport::near_nodes`] resolves.)
+    #[cfg(test)]
     fn near_candidates(&self, at: &[u32]) -> Vec<u32> {
         let hint = self.near_patches(at, 1);
         let mut cand = Vec::new();
@@ -576,6 +577,96 @@ impl Transport {
         cand.sort_unstable();
         cand.dedup();
         cand
+    }
+
+    /// [`Transport::near_candidates`] resolved for a receiver at `x`
+    /// (normal `n`), as [`Clusters::resolve`] would, without sorting their
+    /// union: the candidates and their ancestors are marked in a per-thread
+    /// table, then each tree they lie in is walked from its root through
+    /// the marked nodes (and the whole of each candidate a receiver opens),
+    /// stopping at the first far cluster. The same nodes, so the same
+    /// bytes out; the 8.6k building solved in 57.8 s instead of 61.0 s
+    /// (the union of about ten rows sorted, and every candidate's
+    /// ancestors asked whether they are far, once per candidate).
+    fn near_nodes(&self, x: DVec3, n: DVec3, at: &[u32]) -> Vec<u32> {
+        const CAND: u8 = 1;
+        const NEEDED: u8 = 2;
+        let cl = &self.clusters;
+        let nodes = cl.parent.len();
+        MARKS.with(|m| {
+            let mut m = m.borrow_mut();
+            if m.stamp.len() < nodes {
+                m.stamp.resize(nodes, 0);
+                m.flags.resize(nodes, 0);
+            }
+            m.generation = m.generation.wrapping_add(1);
+            if m.generation == 0 {
+                // (Wrapped: every stamp is stale.)
+                m.stamp.fill(0);
+                m.generation = 1;
+            }
+            let g = m.generation;
+            let Marks { stamp, flags, .. } = &mut *m;
+            let mut cands = Vec::new();
+            for q in self.near_patches(at, 1) {
+                let q = q as usize;
+                let mut prev = 0u32;
+                let mut bytes = self.seen[self.seen_start[q]..self.seen_start[q + 1]].iter();
+                while let Some(d) = read_varint(&mut bytes) {
+                    prev += d;
+                    let k = prev as usize;
+                    if stamp[k] != g {
+                        stamp[k] = g;
+                        flags[k] = 0;
+                    }
+                    if flags[k] & CAND == 0 {
+                        flags[k] |= CAND;
+                        cands.push(prev);
+                    }
+                }
+            }
+            // Each candidate's ancestors, up to one marked already.
+            let mut roots = Vec::new();
+            for &k in &cands {
+                let mut u = k;
+                loop {
+                    let i = u as usize;
+                    if stamp[i] != g {
+                        stamp[i] = g;
+                        flags[i] = 0;
+                    }
+                    if flags[i] & NEEDED != 0 {
+                        break;
+                    }
+                    flags[i] |= NEEDED;
+                    match cl.parent[i] {
+                        NONE => {
+                            roots.push(u);
+                            break;
+                        }
+                        up => u = up,
+                    }
+                }
+            }
+            let mut out = Vec::with_capacity(cands.len());
+            let mut stack: Vec<(u32, bool)> = roots.into_iter().map(|r| (r, false)).collect();
+            while let Some((k, opened)) = stack.pop() {
+                let i = k as usize;
+                let marked = if stamp[i] == g { flags[i] } else { 0 };
+                if !opened && marked & NEEDED == 0 {
+                    continue;
+                }
+                match cl.get(k) {
+                    Some(c) if !cl.far_from(k, x, n) => {
+                        let open = opened || marked & CAND != 0;
+                        stack.extend(c.children.iter().map(|&ch| (ch, open)));
+                    }
+                    _ => out.push(k),
+                }
+            }
+            out.sort_unstable();
+            out
+        })
     }
 
     /// The patches within `rings` steps of `at` (a step: to a patch that
@@ -974,7 +1065,7 @@ impl Transport {
         {
             self.candidates(&r)
         } else {
-            Nodes(self.clusters.resolve(r.x, r.n, self.near_candidates(at)))
+            Nodes(self.near_nodes(r.x, r.n, at))
         };
         (r, cand)
     }
@@ -1172,6 +1263,24 @@ type Shares = [u8; 4];
 /// Nodes of the far field's trees (patches and clusters) that a receiver
 /// takes as they are: resolved for it ([`Clusters::resolve`]).
 struct Nodes(Vec<u32>);
+
+/// Per thread, marks over the nodes for [`Transport::near_nodes`]: a
+/// node's flags hold for the call whose generation its stamp holds.
+struct Marks {
+    generation: u32,
+    stamp: Vec<u32>,
+    flags: Vec<u8>,
+}
+
+thread_local! {
+    static MARKS: std::cell::RefCell<Marks> = const {
+        std::cell::RefCell::new(Marks {
+            generation: 0,
+            stamp: Vec::new(),
+            flags: Vec::new(),
+        })
+    };
+}
 
 /// No node: the parent of a surface's root.
 const NONE: u32 = u32::MAX;
@@ -1869,14 +1978,8 @@ mod tests {
         v a 0 0 0; v b 4 0 0; v c 4 4 0; v d 0 4 0;
         f floor (a b c d) g;";
 
-    /// The walk down the surfaces' trees finds the patches whose boxes
-    /// meet the discovery hits' queries, as a scan of every patch does,
-    /// and raised, the nodes [`Clusters::resolve`] makes of them.
-    #[test]
-    fn the_tree_walk_finds_the_patches_the_queries_meet() {
-        // A room with a box on the floor.
-        let m = mesh(
-            "c_rgb g 0.5 0.5 0.5;
+    /// A room with a box on the floor.
+    const ROOM: &str = "c_rgb g 0.5 0.5 0.5;
              v a 0 0 0; v b 4 0 0; v c 4 3 0; v d 0 3 0;
              v e 0 0 2.5; v f 4 0 2.5; v g 4 3 2.5; v h 0 3 2.5;
              v i 1 1 0.001; v j 2 1 0.001; v k 2 2 0.001; v l 1 2 0.001;
@@ -1884,9 +1987,46 @@ mod tests {
              f floor (a b c d) g; f ceil (e h g f) g; f w1 (a e f b) g;
              f w2 (b f g c) g; f w3 (c g h d) g; f w4 (d h e a) g;
              f top (i2 j2 k2 l2) g; f s1 (i j j2 i2) g; f s2 (j k k2 j2) g;
-             f s3 (k l l2 k2) g; f s4 (l i i2 l2) g;",
-            0.3,
-        );
+             f s3 (k l l2 k2) g; f s4 (l i i2 l2) g;";
+
+    /// A vertex's nodes marked and walked down from the roots are those
+    /// that resolving the union of its neighbours' rows gives, at every
+    /// corner and at points inside the patches, with clusters and without.
+    #[test]
+    fn near_nodes_resolve_the_neighbours_rows() {
+        let m = mesh(ROOM, 0.3);
+        for far in [0.25, 0.0] {
+            let mut t = Transport::build(&m, 1e-3, Some(64), far, &|| false).unwrap();
+            t.compact_rows();
+            let np = t.shooters.len();
+            let (mut raised, mut tried) = (0, 0);
+            for p in 0..np {
+                let sh = &t.shooters[p];
+                let corners = &t.pts[sh.first as usize..(sh.first + sh.n) as usize];
+                for x in corners
+                    .iter()
+                    .map(|&c| c * 0.999 + sh.centre * 0.001)
+                    .chain([sh.centre])
+                {
+                    let at = [p as u32];
+                    let union = t.near_candidates(&at);
+                    let expect = t.clusters.resolve(x, sh.normal, union.clone());
+                    assert_eq!(t.near_nodes(x, sh.normal, &at), expect, "patch {p} at {x}");
+                    raised += usize::from(expect.len() < union.len());
+                    tried += 1;
+                }
+            }
+            assert!(tried > 1000);
+            assert_eq!(raised > tried / 4, far > 0.0, "{raised} of {tried}");
+        }
+    }
+
+    /// The walk down the surfaces' trees finds the patches whose boxes
+    /// meet the discovery hits' queries, as a scan of every patch does,
+    /// and raised, the nodes [`Clusters::resolve`] makes of them.
+    #[test]
+    fn the_tree_walk_finds_the_patches_the_queries_meet() {
+        let m = mesh(ROOM, 0.3);
         let t = transport(&m, 0.25);
         assert!(t.clusters.list.len() > 100);
         let np = t.shooters.len();
