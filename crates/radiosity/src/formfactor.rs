@@ -115,11 +115,13 @@ impl Cell {
     /// The cell's quadrature points (a triangle's three at barycentric
     /// (⅔, ⅙, ⅙), exact for quadratics; a quad's four Gauss points, the
     /// images of (½ ± ½/√3)², exact for bicubics), each standing for an
-    /// equal share of the cell's area, and per point the weights of the
-    /// corners' values there (linear over a triangle, bilinear over a quad).
-    fn quarter_points(&self) -> ([DVec3; 4], [[f64; 4]; 4]) {
-        let p = &self.pts;
+    /// equal share of the cell's area: per point the point form factor's
+    /// density there from `x` (normal `n`), per unit area, and the weights
+    /// of the corners' values there (linear over a triangle, bilinear over
+    /// a quad); and the cell's area. `None` where a point is `x`.
+    fn quadrature(&self, x: DVec3, n: DVec3) -> Option<([f64; 4], [[f64; 4]; 4], f64)> {
         let k = self.n as usize;
+        let p = &self.pts[..k];
         let mut w = [[0.0; 4]; 4];
         for (i, wi) in w.iter_mut().enumerate().take(k) {
             if k == 3 {
@@ -133,50 +135,45 @@ impl Cell {
                 wi[(i + 3) % 4] = g * (1.0 - g);
             }
         }
-        let q = w.map(|wi| (0..k).map(|j| p[j] * wi[j]).sum::<DVec3>());
-        (q, w)
-    }
-
-    /// The point form factor's density from `x` (normal `n`) at the
-    /// quarter points, per unit area (`None` where a quarter point is `x`).
-    fn densities(&self, x: DVec3, n: DVec3, q: &[DVec3; 4]) -> Option<[f64; 4]> {
-        let p = &self.pts;
-        let m = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
-        let mut out = [0.0; 4];
-        for (o, &qi) in out.iter_mut().zip(q).take(self.n as usize) {
-            let d = qi - x;
+        let normal = geom::plane::newell_normal(p);
+        let m = normal.normalize_or_zero();
+        let mut dens = [0.0; 4];
+        for (o, wi) in dens.iter_mut().zip(&w).take(k) {
+            let d = (0..k).map(|j| p[j] * wi[j]).sum::<DVec3>() - x;
             let d2 = d.length_squared();
             if d2 <= 0.0 {
                 return None;
             }
             *o = n.dot(d).max(0.0) * m.dot(d).abs() / (std::f64::consts::PI * d2 * d2);
         }
-        out.iter().all(|v| v.is_finite()).then_some(out)
+        dens.iter()
+            .all(|v| v.is_finite())
+            .then_some((dens, w, 0.5 * normal.length()))
     }
 
     /// The cell's value (`self`'s, and `b`'s over the same cell) where a
-    /// receiver at `x` (normal `n`) weighs it: the values at the quarter
+    /// receiver at `x` (normal `n`) weighs it: the values at the quadrature
     /// points weighted by the form factor's density there (to second order
     /// the value at the form factor's centroid over the cell, where the
     /// mean of the corners is only first order). The means where the
-    /// density vanishes at every quarter point.
+    /// density vanishes at every point.
     fn weighted_means(&self, b: Option<&Cell>, x: DVec3, n: DVec3) -> (f64, f64) {
-        let (q, w) = self.quarter_points();
-        let means = (self.mean(), b.map_or(0.0, Cell::mean));
-        let Some(k) = self.densities(x, n, &q) else {
-            return means;
-        };
-        let sum: f64 = k.iter().sum();
-        if sum <= 0.0 {
-            return means;
+        match self.quadrature(x, n) {
+            Some((dens, w, _)) => self.values_at(b, &dens, &w),
+            None => (self.mean(), b.map_or(0.0, Cell::mean)),
         }
+    }
+
+    /// [`Cell::weighted_means`] given the densities and weights.
+    fn values_at(&self, b: Option<&Cell>, dens: &[f64; 4], w: &[[f64; 4]; 4]) -> (f64, f64) {
+        let sum: f64 = dens.iter().sum();
+        if sum <= 0.0 {
+            return (self.mean(), b.map_or(0.0, Cell::mean));
+        }
+        let k = self.n as usize;
         let at = |c: &Cell| -> f64 {
-            (0..c.n as usize)
-                .map(|i| {
-                    k[i] * (0..c.n as usize)
-                        .map(|j| w[i][j] * f64::from(c.s[j]))
-                        .sum::<f64>()
-                })
+            (0..k)
+                .map(|i| dens[i] * (0..k).map(|j| w[i][j] * f64::from(c.s[j])).sum::<f64>())
                 .sum::<f64>()
                 / sum
         };
@@ -184,24 +181,17 @@ impl Cell {
     }
 
     /// (F̃, F̃·a, F̃·b): the cell's form factor estimated from the density
-    /// at its quadrature points (each standing for an equal share of its area),
-    /// times its values there ([`Cell::weighted_means`]).
+    /// at its quadrature points (each standing for an equal share of its
+    /// area), times its values there ([`Cell::weighted_means`]).
     fn density(&self, b: Option<&Cell>, x: DVec3, n: DVec3) -> [f64; 3] {
-        let (q, _) = self.quarter_points();
-        let Some(k) = self.densities(x, n, &q) else {
+        let Some((dens, w, area)) = self.quadrature(x, n) else {
             return [0.0; 3];
         };
-        let p = &self.pts;
-        let area = if self.n == 3 {
-            0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length()
-        } else {
-            0.5 * (p[2] - p[0]).cross(p[3] - p[1]).length()
-        };
-        let f = area / f64::from(self.n) * k.iter().sum::<f64>();
+        let f = area / f64::from(self.n) * dens.iter().sum::<f64>();
         if f <= 0.0 {
             return [0.0; 3];
         }
-        let (ma, mb) = self.weighted_means(b, x, n);
+        let (ma, mb) = self.values_at(b, &dens, &w);
         [f, f * ma, f * mb]
     }
 
@@ -266,10 +256,10 @@ impl Cell {
 /// radiosity times the form factor.
 ///
 /// (Cutting cells larger than half their distance and taking each part
-/// at its mean cost a quarter of the 8.6k building's solve; this gives
-/// the tail 7% faster and nearer a reference cut four times as finely,
-/// a mean difference over the vertices of 0.008% against 0.010%, the
-/// largest 1.3% against 6.4%: docs/performance.md.)
+/// at its mean cost a quarter of the 8.6k building's solve; this solves
+/// it 7% faster and nearer a reference cut four times as finely, a mean
+/// difference over the vertices of 0.008% against 0.010%, the largest
+/// 2.2% against 5.3%: docs/decisions.md, "Shaped form factors".)
 pub fn shaped_form_factor(
     x: DVec3,
     n: DVec3,
@@ -298,14 +288,14 @@ pub fn shaped_form_factor_pair(
 
 /// A cell at least this many times its diameter from the receiver (in
 /// squares) takes its part of the form factor from the density at its
-/// quarter points (see [`shaped`]).
+/// quadrature points (see [`shaped`]).
 const SMOOTH2: f64 = 16.0;
 
 /// [`shaped_form_factor`] and the pair. The cells far from `x` for their
 /// size (where the form factor's density varies by less than about three
 /// times across one) share what the cells near `x` leave of the exact form
 /// factor of the `outline` they tile, in proportion to their densities at
-/// their quarter points; the others are cut (while larger than their
+/// their quadrature points; the others are cut (while larger than their
 /// distance) and integrated exactly, part by part. Only the spread of the
 /// far cells' light is approximated, to second order (the error is the
 /// product of a cell's light's deviation from their mean and of its
@@ -352,12 +342,11 @@ fn shaped(
     let (mut near, mut far) = ([0.0; 3], [0.0; 3]);
     for (i, c) in a.iter().enumerate() {
         let cb = b.map(|b| &b[i]);
-        let r = if c.smooth_for(x) {
-            c.density(cb, x, n)
+        let (r, acc) = if c.smooth_for(x) {
+            (c.density(cb, x, n), &mut far)
         } else {
-            exact(x, n, c, cb, depth, &mut buf)
+            (exact(x, n, c, cb, depth, &mut buf), &mut near)
         };
-        let acc = if c.smooth_for(x) { &mut far } else { &mut near };
         for j in 0..3 {
             acc[j] += r[j];
         }
@@ -603,7 +592,7 @@ mod tests {
     }
 
     /// A linearly varying light over a square and a triangle, seen from
-    /// near and far: the cut cells weighted at their quarter points give
+    /// near and far: the cut cells weighted at their quadrature points give
     /// the integral of a 256 × 256 grid of exact parts, each at its
     /// centre's value; and the square as 8 × 8 tiles, those far for their
     /// size sharing what the near ones leave. (Each part at its mean, cut
