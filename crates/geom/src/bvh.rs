@@ -1,13 +1,18 @@
 //! A bounding-volume hierarchy over triangles for ray casting (f64).
 //!
-//! Built top-down by splitting at the median centroid along the longest axis
-//! of the node's centroid bounds; leaves hold at most four triangles. Rays
-//! are intersected with Möller–Trumbore in f64.
+//! Built top-down, binary, by the surface area heuristic ([`build_nodes`]);
+//! leaves hold at most four triangles. Box queries and shafts walk the
+//! binary tree; rays walk the same tree collapsed four-wide ([`Wide`]),
+//! four boxes a step. Rays are intersected with the watertight test of
+//! Woop, Benthin and Wald in f64 ([`ray_triangle`]).
 
 use glam::DVec3;
 
 use crate::polygon::Projected;
 use crate::triangulate::triangulate_polygon;
+
+mod wide;
+pub use wide::Wide;
 
 /// A triangle tagged with the id of what it belongs to (e.g. a face).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -82,6 +87,8 @@ fn f32_up(x: f64) -> f32 {
 #[derive(Clone, Debug)]
 pub struct Bvh {
     nodes: Vec<Node>,
+    /// The same tree four-wide, for the ray walks.
+    wide: Wide,
     tris: Vec<Triangle>,
     /// What the nodes' boxes are measured from ([`build_nodes`]).
     base: DVec3,
@@ -93,7 +100,13 @@ pub const LEAF: usize = 4;
 impl Bvh {
     pub fn new(mut tris: Vec<Triangle>) -> Bvh {
         let (nodes, base) = build_nodes(&mut tris, |t| t.p);
-        Bvh { nodes, tris, base }
+        let wide = Wide::new(&nodes);
+        Bvh {
+            nodes,
+            wide,
+            tris,
+            base,
+        }
     }
 
     pub fn len(&self) -> usize {
@@ -215,92 +228,31 @@ impl Bvh {
         keep: &dyn Fn(u32) -> bool,
         on_hit: &mut dyn FnMut(Hit) -> bool,
     ) {
-        if self.nodes.is_empty() {
-            return;
-        }
         let inv = DVec3::ONE / dir;
         let Some(frame) = RayFrame::new(dir) else {
             return; // no triangle can be hit
         };
         // The boxes are measured from `base`; the triangles are not.
         let rel = origin - self.base;
-        let root = &self.nodes[0];
-        let Some(t0) = slab_entry(root.lo(), root.hi(), rel, inv, tmin, *tmax) else {
-            return;
-        };
-        // Nodes to visit with their entry parameter; when looking for the
-        // nearest hit the nearer child is visited first and a node entered
-        // beyond the nearest hit so far is skipped.
-        let mut stack = [(0u32, 0.0f64); 64];
-        stack[0] = (0, t0);
-        let mut sp = 1usize;
-        while sp > 0 {
-            sp -= 1;
-            let (ni, entry) = stack[sp];
-            if entry > *tmax {
-                continue;
-            }
-            let n = &self.nodes[ni as usize];
-            if n.count > 0 {
-                for t in &self.tris[n.first as usize..(n.first + n.count) as usize] {
-                    if !keep(t.id) {
-                        continue;
+        self.wide.walk(rel, inv, tmin, tmax, |first, count, tmax| {
+            for t in &self.tris[first as usize..(first + count) as usize] {
+                if !keep(t.id) {
+                    continue;
+                }
+                if let Some(tt) = ray_triangle_with(origin, &frame, t)
+                    && tt > tmin
+                    && tt < *tmax
+                {
+                    if shrink {
+                        *tmax = tt;
                     }
-                    if let Some(tt) = ray_triangle_with(origin, &frame, t)
-                        && tt > tmin
-                        && tt < *tmax
-                    {
-                        if shrink {
-                            *tmax = tt;
-                        }
-                        if on_hit(Hit { t: tt, id: t.id }) {
-                            return;
-                        }
+                    if on_hit(Hit { t: tt, id: t.id }) {
+                        return true;
                     }
                 }
-            } else if sp + 2 <= stack.len() {
-                push_children(&self.nodes, n, rel, inv, tmin, *tmax, &mut stack, &mut sp);
             }
-        }
-    }
-}
-
-/// Pushes the children of the inner node `n` that the ray (`inv` = 1/d per
-/// component) meets within [tmin, tmax] onto `stack` above `sp`, each with
-/// its entry parameter, the nearer on top (popped first; the first child
-/// when they tie). The caller makes room for two.
-#[inline]
-#[allow(clippy::too_many_arguments)]
-pub fn push_children(
-    nodes: &[Node],
-    n: &Node,
-    o: DVec3,
-    inv: DVec3,
-    tmin: f64,
-    tmax: f64,
-    stack: &mut [(u32, f64)],
-    sp: &mut usize,
-) {
-    let (a, b) = (n.first, n.first + 1);
-    let (na, nb) = (&nodes[a as usize], &nodes[b as usize]);
-    let ea = slab_entry(na.lo(), na.hi(), o, inv, tmin, tmax);
-    let eb = slab_entry(nb.lo(), nb.hi(), o, inv, tmin, tmax);
-    let mut push = |e: (u32, f64)| {
-        stack[*sp] = e;
-        *sp += 1;
-    };
-    match (ea, eb) {
-        (Some(x), Some(y)) if y < x => {
-            push((a, x));
-            push((b, y));
-        }
-        (Some(x), Some(y)) => {
-            push((b, y));
-            push((a, x));
-        }
-        (Some(x), None) => push((a, x)),
-        (None, Some(y)) => push((b, y)),
-        (None, None) => {}
+            false
+        });
     }
 }
 

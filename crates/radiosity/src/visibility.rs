@@ -2,8 +2,8 @@
 //! ray-cast implementation (the reference, and the fallback without a GPU).
 
 use geom::bvh::{
-    Node, RayFrame, Shaft, ShaftTri, Triangle, build_nodes, push_children, ray_triangle_with,
-    shaft_triangles, slab_entry,
+    Node, RayFrame, Shaft, ShaftTri, Triangle, Wide, build_nodes, ray_triangle_with,
+    shaft_triangles,
 };
 use glam::DVec3;
 use libmesh::{Mesh, SurfaceId, VertId};
@@ -104,6 +104,8 @@ pub struct RayVisibility {
     pts: Vec<DVec3>,
     tris: Vec<Tri>,
     nodes: Vec<Node>,
+    /// The same tree four-wide, for the rays.
+    wide: Wide,
     /// What the nodes' boxes are measured from ([`build_nodes`]).
     base: DVec3,
     /// The shafts' slack ([`geom::bvh::shaft_slack`]).
@@ -144,10 +146,12 @@ impl RayVisibility {
         }
         let (nodes, base) = build_nodes(&mut tris, |t| t.v.map(|v| pts[v as usize]));
         let tol = geom::bvh::shaft_slack(&pts);
+        let wide = Wide::new(&nodes);
         RayVisibility {
             pts,
             tris,
             nodes,
+            wide,
             base,
             tol,
         }
@@ -166,6 +170,7 @@ impl RayVisibility {
         self.pts.capacity() * size_of::<DVec3>()
             + self.tris.capacity() * size_of::<Tri>()
             + self.nodes.capacity() * size_of::<Node>()
+            + self.wide.heap_bytes()
     }
 
     /// The triangles (indices into `tris`) of surfaces other than `a` and
@@ -230,51 +235,34 @@ impl RayVisibility {
         nearest: bool,
         keep: impl Fn(u32) -> bool,
     ) -> Option<&Tri> {
-        if self.nodes.is_empty() {
-            return None;
-        }
         let inv = DVec3::ONE / dir;
         let frame = RayFrame::new(dir)?;
         // The boxes are measured from `base`; the triangles are not.
-        let rel = origin - self.base;
-        let root = &self.nodes[0];
-        let t0 = slab_entry(root.lo(), root.hi(), rel, inv, tmin, tmax)?;
-        // Nearer child first: a ray toward a vertex in another room is
+        // Nearer boxes first: a ray toward a vertex in another room is
         // usually stopped by a wall near its start, so the boxes near the
         // origin are the likely place of a hit. Whether anything is hit
         // does not depend on the order, so the answers do not change.
-        let mut stack = [(0u32, 0.0f64); 64];
-        stack[0] = (0, t0);
-        let mut sp = 1usize;
+        let rel = origin - self.base;
         let mut best = None;
-        while sp > 0 {
-            sp -= 1;
-            let (ni, entry) = stack[sp];
-            if entry > tmax {
-                continue;
-            }
-            let n = &self.nodes[ni as usize];
-            if n.count > 0 {
-                for t in &self.tris[n.first as usize..(n.first + n.count) as usize] {
+        self.wide
+            .walk(rel, inv, tmin, &mut tmax, |first, count, tmax| {
+                for t in &self.tris[first as usize..(first + count) as usize] {
                     if !keep(t.surface) {
                         continue;
                     }
                     if let Some(tt) = ray_triangle_with(origin, &frame, &self.triangle(t))
                         && tt > tmin
-                        && tt < tmax
+                        && tt < *tmax
                     {
-                        if !nearest {
-                            return Some(t);
-                        }
                         best = Some(t);
-                        tmax = tt;
+                        if !nearest {
+                            return true;
+                        }
+                        *tmax = tt;
                     }
                 }
-            } else {
-                assert!(sp + 2 <= stack.len(), "BVH deeper than its traversal stack");
-                push_children(&self.nodes, n, rel, inv, tmin, tmax, &mut stack, &mut sp);
-            }
-        }
+                false
+            });
         best
     }
 }
