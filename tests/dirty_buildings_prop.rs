@@ -286,10 +286,14 @@ fn dirty_buildings_seeds_150_to_199() {
 /// * 367: a wall's end about 2 epsilon in front of the facade, its piece
 ///   tilted onto the slab's vertices across the strip between, then pieces
 ///   of the two coplanar only after ugcut
-///   (fixtures/copl/wall-end-past-slab.ug).
+///   (fixtures/copl/wall-end-past-slab.ug);
+/// * 5731 (found over 5000..6000): three T-vertices after ugclean's
+///   coincident step, a wall bottom 1.8 epsilon under a tiled floor tilted
+///   onto it when a coincident pair's records were shared
+///   (fixtures/clean/tilted-wall-bottom-over-tiles.ug).
 #[test]
 fn dirty_buildings_regression_seeds() {
-    run(vec![228, 326, 367, 556, 573]);
+    run(vec![228, 326, 367, 556, 573, 5731]);
 }
 
 /// Buildings as CAD exports place them on a site ([`place`]): turned by

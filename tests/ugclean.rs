@@ -445,3 +445,30 @@ fn a_join_that_puts_a_corner_on_an_edge_is_repaired() {
         assert_eq!(r[key].as_array().unwrap().len(), 0, "{key}:\n{out}");
     }
 }
+
+/// A coincident pair's records are not shared when that would tilt a face
+/// next to them so that its edge comes within epsilon of vertices it
+/// passed by more than epsilon (fixtures/clean/tilted-wall-bottom-over-tiles.ug,
+/// property seed 5731): before, three T-vertices after ugclean.
+#[test]
+fn sharing_a_pairs_records_makes_no_t_vertex() {
+    let src = std::fs::read_to_string(fixture("clean/tilted-wall-bottom-over-tiles.ug")).unwrap();
+    let eps = "1.6427471791923383e-5";
+    let out = run_ok(
+        "ugclean",
+        &["--keep-enclosed", "-e", eps],
+        Some(src.as_bytes()),
+    );
+    let r: serde_json::Value = serde_json::from_str(&run_ok(
+        "ugcheck",
+        &["--json", "-e", eps],
+        Some(out.as_bytes()),
+    ))
+    .unwrap();
+    for key in ["degenerate", "intersecting", "tvertices", "nonplanar"] {
+        assert_eq!(r[key].as_array().unwrap().len(), 0, "{key}:\n{out}");
+    }
+    // The pair is still resolved: the later face of the same material goes.
+    assert!(out.contains("f s0w1p0.0.i4 "), "{out}");
+    assert!(!out.contains("f wing0.0.i2 "), "{out}");
+}

@@ -283,19 +283,7 @@ fn snap_onto_removed(
     };
     let index = std::cell::OnceCell::new();
     let crossing = |moved: &BTreeMap<u32, DVec3>| -> Vec<u32> {
-        let index = index.get_or_init(|| {
-            geom::BoxIndex::new(m.top_faces().filter(|f| !removed[f.idx()]).map(|f| {
-                let (lo, hi) = geom::index::bbox(
-                    m.faces[f.idx()]
-                        .contours
-                        .iter()
-                        .flatten()
-                        .map(|&v| m.pos(v)),
-                    tol,
-                );
-                (lo, hi, f.0)
-            }))
-        });
+        let index = index.get_or_init(|| face_index(m, removed, tol));
         let none = BTreeMap::new();
         let mut bad = Vec::new();
         for f in affected(moved) {
@@ -321,6 +309,66 @@ fn snap_onto_removed(
         bad.sort_unstable();
         bad.dedup();
         bad
+    };
+    // Whether moving the vertices of `moved` puts a vertex within `eps`
+    // of an edge it was not within `eps` of (ugcheck's T-vertex: not
+    // within `eps` of the edge's ends either): a kept face's corner taking
+    // its removed twin's record tilts the face, and its edges may then
+    // pass by vertices they passed more than epsilon from (a wall's
+    // bottom 1.8 epsilon below a tiled floor, its end corners moved onto
+    // the floor's: property seed 5731). The faces whose edges do and the
+    // vertices met.
+    let vindex = std::cell::OnceCell::new();
+    let tees = |moved: &BTreeMap<u32, DVec3>| -> (Vec<u32>, Vec<u32>) {
+        let vindex = vindex.get_or_init(|| {
+            let used = (0..users.len() as u32).filter(|&v| !users[v as usize].is_empty());
+            geom::BoxIndex::new(used.map(|v| {
+                let p = m.pos(ug::VertexId(v));
+                (p - DVec3::splat(tol), p + DVec3::splat(tol), v)
+            }))
+        });
+        let pos = |v: u32| {
+            moved
+                .get(&v)
+                .copied()
+                .unwrap_or_else(|| m.pos(ug::VertexId(v)))
+        };
+        let tee = |p: DVec3, a: DVec3, b: DVec3| {
+            p.distance(a) > eps
+                && p.distance(b) > eps
+                && geom::point_segment_distance(p, a, b).0 <= eps
+        };
+        // The faces whose edges may have come near a vertex: those that
+        // name a moved vertex, and those near a moved vertex's new place.
+        let mut faces = affected(moved);
+        let index = index.get_or_init(|| face_index(m, removed, tol));
+        for p in moved.values() {
+            faces.extend(index.query(*p - DVec3::splat(eps), *p + DVec3::splat(eps)));
+        }
+        faces.sort_unstable();
+        faces.dedup();
+        let (mut bad_faces, mut bad_vertices) = (Vec::new(), Vec::new());
+        for f in faces {
+            for c in &m.faces[f as usize].contours {
+                for k in 0..c.len() {
+                    let (a, b) = (c[k].0, c[(k + 1) % c.len()].0);
+                    let (pa, pb) = (pos(a), pos(b));
+                    let (oa, ob) = (m.pos(ug::VertexId(a)), m.pos(ug::VertexId(b)));
+                    let pad = DVec3::splat(eps);
+                    for v in vindex.query(pa.min(pb) - pad, pa.max(pb) + pad) {
+                        if v == a || v == b {
+                            continue;
+                        }
+                        if tee(pos(v), pa, pb) && !tee(m.pos(ug::VertexId(v)), oa, ob) {
+                            bad_faces.push(f);
+                            bad_vertices.push(v);
+                        }
+                    }
+                }
+            }
+        }
+        bad_faces.dedup();
+        (bad_faces, bad_vertices)
     };
     // (record replaced, record kept) links.
     let mut links: Vec<(u32, u32)> = Vec::new();
@@ -356,10 +404,9 @@ fn snap_onto_removed(
         } else {
             [(b, &onto_ours, false), (a, &onto_theirs, true)]
         };
-        if let Some(&(_, _, kept_moves)) = ways
-            .iter()
-            .find(|(d, moved, _)| *d <= 0.5 * eps && crossing(moved).is_empty())
-        {
+        if let Some(&(_, _, kept_moves)) = ways.iter().find(|(d, moved, _)| {
+            *d <= 0.5 * eps && crossing(moved).is_empty() && tees(moved).0.is_empty()
+        }) {
             if kept_moves {
                 links.extend(matched.iter().copied());
             } else {
@@ -438,6 +485,11 @@ fn snap_onto_removed(
             for f in crossing(&moved) {
                 veto.extend(m.faces[f as usize].contours.iter().flatten().map(|v| v.0));
             }
+            let (faces, vertices) = tees(&moved);
+            for f in faces {
+                veto.extend(m.faces[f as usize].contours.iter().flatten().map(|v| v.0));
+            }
+            veto.extend(vertices);
         }
         if veto.is_empty() {
             break;
@@ -469,6 +521,21 @@ fn snap_onto_removed(
         }
     }
     to.keys().copied().collect()
+}
+
+/// The boxes (widened by `tol`) of the top-level faces not `removed`.
+fn face_index(m: &Model, removed: &[bool], tol: f64) -> geom::BoxIndex {
+    geom::BoxIndex::new(m.top_faces().filter(|f| !removed[f.idx()]).map(|f| {
+        let (lo, hi) = geom::index::bbox(
+            m.faces[f.idx()]
+                .contours
+                .iter()
+                .flatten()
+                .map(|&v| m.pos(v)),
+            tol,
+        );
+        (lo, hi, f.0)
+    }))
 }
 
 /// The model without the faces marked in `removed` (indexed by `FaceId`),
