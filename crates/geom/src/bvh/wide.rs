@@ -13,9 +13,9 @@
 //! same parameter (the one found first wins, and the order of the walk
 //! differs).
 //!
-//! The binary tree stays for box queries and shafts; the wide one is about
-//! two thirds of its size (128 bytes a node for about a third as many
-//! nodes as the binary tree has inner nodes).
+//! The binary tree stays for box queries and shafts; the wide one takes
+//! about as much memory again (on 3,000 random triangles: 482 wide nodes
+//! of 128 bytes, their lanes 79% used, for 2,082 binary nodes of 32).
 
 use glam::DVec3;
 
