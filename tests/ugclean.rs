@@ -416,6 +416,24 @@ fn a_tents_tip_joins_a_neighbour() {
     }
 }
 
+/// `ugclean --keep-enclosed` on a fixture at epsilon `eps`: its output and
+/// ugcheck's report of it.
+fn coincident_step_checked(path: &str, eps: &str) -> (String, serde_json::Value) {
+    let src = std::fs::read_to_string(fixture(path)).unwrap();
+    let out = run_ok(
+        "ugclean",
+        &["--keep-enclosed", "-e", eps],
+        Some(src.as_bytes()),
+    );
+    let r = serde_json::from_str(&run_ok(
+        "ugcheck",
+        &["--json", "-e", eps],
+        Some(out.as_bytes()),
+    ))
+    .unwrap();
+    (out, r)
+}
+
 /// A coincident pair's corners 1.01 epsilon apart joined into one record
 /// (fixtures/clean/joined-corner-on-an-edge.ug, from property seed 22 on 3 × 2
 /// rooms, a triangle export with an oblique wing): the face beside them
@@ -423,19 +441,8 @@ fn a_tents_tip_joins_a_neighbour() {
 /// epsilon, until ugclean repaired the faces after joining.
 #[test]
 fn a_join_that_puts_a_corner_on_an_edge_is_repaired() {
-    let src = std::fs::read_to_string(fixture("clean/joined-corner-on-an-edge.ug")).unwrap();
-    let eps = "2.2780725453821576e-5";
-    let out = run_ok(
-        "ugclean",
-        &["--keep-enclosed", "-e", eps],
-        Some(src.as_bytes()),
-    );
-    let r: serde_json::Value = serde_json::from_str(&run_ok(
-        "ugcheck",
-        &["--json", "-e", eps],
-        Some(out.as_bytes()),
-    ))
-    .unwrap();
+    let (out, r) =
+        coincident_step_checked("clean/joined-corner-on-an-edge.ug", "2.2780725453821576e-5");
     assert!(
         !out.contains("slab0.1.t1.i102.c3"),
         "the floor piece goes:\n{out}"
@@ -452,19 +459,10 @@ fn a_join_that_puts_a_corner_on_an_edge_is_repaired() {
 /// property seed 5731): before, three T-vertices after ugclean.
 #[test]
 fn sharing_a_pairs_records_makes_no_t_vertex() {
-    let src = std::fs::read_to_string(fixture("clean/tilted-wall-bottom-over-tiles.ug")).unwrap();
-    let eps = "1.6427471791923383e-5";
-    let out = run_ok(
-        "ugclean",
-        &["--keep-enclosed", "-e", eps],
-        Some(src.as_bytes()),
+    let (out, r) = coincident_step_checked(
+        "clean/tilted-wall-bottom-over-tiles.ug",
+        "1.6427471791923383e-5",
     );
-    let r: serde_json::Value = serde_json::from_str(&run_ok(
-        "ugcheck",
-        &["--json", "-e", eps],
-        Some(out.as_bytes()),
-    ))
-    .unwrap();
     for key in ["degenerate", "intersecting", "tvertices", "nonplanar"] {
         assert_eq!(r[key].as_array().unwrap().len(), 0, "{key}:\n{out}");
     }

@@ -553,14 +553,6 @@ fn slab_entry_finite(
     tmin: f64,
     tmax: f64,
 ) -> Option<f64> {
-    #[inline(always)]
-    fn lt_min(a: f64, b: f64) -> f64 {
-        if a < b { a } else { b }
-    }
-    #[inline(always)]
-    fn gt_max(a: f64, b: f64) -> f64 {
-        if a > b { a } else { b }
-    }
     let a = (lo - o) * inv;
     let b = (hi - o) * inv;
     let near = [lt_min(a.x, b.x), lt_min(a.y, b.y), lt_min(a.z, b.z)];
@@ -572,6 +564,19 @@ fn slab_entry_finite(
     let tn = gt_max(gt_max(tmin, near[0]), gt_max(near[1], near[2]));
     let tf = lt_min(lt_min(tmax, far[0]), lt_min(far[1], far[2]));
     (tn <= tf).then_some(tn)
+}
+
+/// The lesser of two numbers that are not NaN (a plain comparison: no NaN
+/// handling, no branch once compiled).
+#[inline(always)]
+fn lt_min(a: f64, b: f64) -> f64 {
+    if a < b { a } else { b }
+}
+
+/// The greater of two numbers that are not NaN.
+#[inline(always)]
+fn gt_max(a: f64, b: f64) -> f64 {
+    if a > b { a } else { b }
 }
 
 /// The ray parameter of the hit, if the ray meets the triangle (either

@@ -19,7 +19,7 @@
 
 use glam::DVec3;
 
-use super::{Node, slab_entry_general, widen};
+use super::{Node, gt_max, lt_min, slab_entry_general, widen};
 
 /// A lane that holds no child.
 const EMPTY: u32 = u32::MAX;
@@ -236,16 +236,6 @@ impl Wide {
             }
         }
     }
-}
-
-#[inline(always)]
-fn lt_min(a: f64, b: f64) -> f64 {
-    if a < b { a } else { b }
-}
-
-#[inline(always)]
-fn gt_max(a: f64, b: f64) -> f64 {
-    if a > b { a } else { b }
 }
 
 /// Each lane's entry parameter and a bit per lane met: [`super::slab_entry`]'s
