@@ -290,10 +290,13 @@ fn dirty_buildings_seeds_150_to_199() {
 /// * 5731 (found over 5000..6000): three T-vertices after ugclean's
 ///   coincident step, a wall bottom 1.8 epsilon under a tiled floor tilted
 ///   onto it when a coincident pair's records were shared
-///   (fixtures/clean/tilted-wall-bottom-over-tiles.ug).
+///   (fixtures/clean/tilted-wall-bottom-over-tiles.ug);
+/// * 11884 (found over 10000..12000): three coincident pairs after
+///   ugclean, made coincident by the records its pairs shared (ugclean's
+///   coincident step now runs again while sharing records finds new pairs).
 #[test]
 fn dirty_buildings_regression_seeds() {
-    run(vec![228, 326, 367, 556, 573, 5731]);
+    run(vec![228, 326, 367, 556, 573, 5731, 11884]);
 }
 
 /// Buildings as CAD exports place them on a site ([`place`]): turned by
