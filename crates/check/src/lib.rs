@@ -725,12 +725,7 @@ fn t_vertices(cx: &Ctx<'_>, mesh: &winged::Mesh, geoms: &[Option<FaceGeom>]) -> 
                 if v == ed.v[0] || v == ed.v[1] {
                     continue;
                 }
-                let p = m.pos(v);
-                if (p - a).length() <= eps || (p - b).length() <= eps {
-                    continue;
-                }
-                let (d, _) = point_segment_distance(p, a, b);
-                if d <= eps {
+                if geom::on_edge_interior(m.pos(v), a, b, eps).is_some() {
                     let mut faces: Vec<String> = ed
                         .uses
                         .iter()

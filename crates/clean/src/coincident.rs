@@ -137,10 +137,11 @@ pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
     // Sharing a pair's records can make two other faces coincident that
     // were not (a wall's end piece and the facade piece beside it, once
     // both take the corners of a pair between them: property seed 11884,
-    // three such pairs): the step runs again on what it wrote, a few
-    // rounds at most.
+    // three such pairs): while a round shares records, the step runs again
+    // on what it wrote, three more rounds at most.
+    let mut shared = stats.snapped;
     for _ in 0..3 {
-        if stats.snapped == 0 {
+        if shared == 0 {
             break;
         }
         let (next, st) = clean_once(&out, eps);
@@ -148,13 +149,11 @@ pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
             break;
         }
         out = next;
+        shared = st.snapped;
         stats.pairs += st.pairs;
         stats.removed.extend(st.removed);
         stats.area_removed += st.area_removed;
         stats.snapped += st.snapped;
-        if st.snapped == 0 {
-            break;
-        }
     }
     (out, stats)
 }
@@ -361,11 +360,7 @@ fn snap_onto_removed(
                 .copied()
                 .unwrap_or_else(|| m.pos(ug::VertexId(v)))
         };
-        let tee = |p: DVec3, a: DVec3, b: DVec3| {
-            p.distance(a) > eps
-                && p.distance(b) > eps
-                && geom::point_segment_distance(p, a, b).0 <= eps
-        };
+        let tee = |p: DVec3, a: DVec3, b: DVec3| geom::on_edge_interior(p, a, b, eps).is_some();
         // The faces whose edges may have come near a vertex: those that
         // name a moved vertex, and those near a moved vertex's new place.
         let mut faces = affected(moved);

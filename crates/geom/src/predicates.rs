@@ -99,6 +99,18 @@ pub fn point_segment_distance(p: DVec3, a: DVec3, b: DVec3) -> (f64, f64) {
     ((a + ab * t - p).length(), t)
 }
 
+/// Where `p` lies on the interior of the edge [a, b] within `eps`: the
+/// parameter of its nearest point when it is within `eps` of the segment
+/// and farther than `eps` from both ends (a T-vertex, as ugcheck counts
+/// them and the weld inserts them), else `None`.
+pub fn on_edge_interior(p: DVec3, a: DVec3, b: DVec3, eps: f64) -> Option<f64> {
+    if p.distance(a) <= eps || p.distance(b) <= eps {
+        return None;
+    }
+    let (d, t) = point_segment_distance(p, a, b);
+    (d <= eps).then_some(t)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -15,7 +15,7 @@
 
 use std::collections::hash_map::Entry;
 
-use geom::{BoxIndex, DVec3, newell_normal, point_segment_distance};
+use geom::{BoxIndex, DVec3, newell_normal, on_edge_interior, point_segment_distance};
 use rustc_hash::{FxHashMap, FxHashSet};
 
 use crate::{EdgeId, FaceId, Mesh, VertexId};
@@ -408,12 +408,7 @@ fn vertices_on_edge(mesh: &Mesh, index: &Points, e: EdgeId, eps: f64) -> Vec<Ver
         if v == ed.v[0] || v == ed.v[1] || mesh.vertex_edges(v).is_empty() {
             continue;
         }
-        let p = mesh.pos(v);
-        if p.distance(a) <= eps || p.distance(b) <= eps {
-            continue;
-        }
-        let (d, t) = point_segment_distance(p, a, b);
-        if d <= eps {
+        if let Some(t) = on_edge_interior(mesh.pos(v), a, b, eps) {
             on.push((t, v));
         }
     }

@@ -28,7 +28,7 @@ const EMPTY: u32 = u32::MAX;
 /// base), and what each child is.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
-pub struct Node4 {
+struct Node4 {
     /// `lo[axis][lane]`.
     lo: [[f32; 4]; 3],
     hi: [[f32; 4]; 3],
