@@ -11,6 +11,7 @@ const CASES: &[(&str, Option<&str>, usize, &[&str])] = &[
     ("tvertex", Some("tvertex"), 1, &["boundary"]),
     ("intersect", Some("intersect"), 1, &["boundary"]),
     ("wall-on-floor", Some("intersect"), 1, &["boundary"]),
+    ("leg-on-tilted-column", None, 0, &["boundary", "nonpatch"]),
     ("overlap", Some("overlap"), 1, &["boundary"]),
     ("coincident", Some("coincident"), 1, &["boundary"]),
     ("degenerate", Some("degenerate"), 2, &["boundary"]),
