@@ -12,7 +12,8 @@ Examples:
   ugbuilding --cad --faces 8600 --storeys 2 -o house.ug   drawn as CAD exports it (slabs, wall runs, openings, ...)
   ugbuilding --cad --rooms 2 --storeys 3 --seed 5         a small three-storey one
   ugbuilding --cad --faces 2000 --triangles                exported as triangles (STL-like)
-  ugbuilding --cad --rooms 3 --wing --pitched --seed 4    an oblique wing and a pitched roof";
+  ugbuilding --cad --rooms 3 --wing --pitched --seed 4    an oblique wing and a pitched roof
+  ugbuilding --cad --rooms 2 --stairs                     stairs and ramps in some rooms";
 
 /// Generate a CAD-like building as UniGrafix: a grid of 4 × 5 × 3 rooms
 /// (metres) with floors of 2 × 2 quads, walls of a lower and an upper face,
@@ -70,6 +71,11 @@ struct Args {
     /// gable walls running into the roof.
     #[arg(long, requires = "cad")]
     pitched: bool,
+    /// Put a flight of steps or a ramp in about half the --cad building's
+    /// rooms: steps as boxes sunk into the floor, each overlapping the
+    /// next; ramps as wedges whose slope meets the floor at 2.9–7.1°.
+    #[arg(long, requires = "cad")]
+    stairs: bool,
     /// Seed of the random choices.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -163,6 +169,7 @@ fn main() -> std::process::ExitCode {
             cfg.triangles = args.triangles;
             cfg.wing = args.wing;
             cfg.pitched = args.pitched;
+            cfg.stairs = args.stairs;
             let model = building::cad(&cfg, args.seed);
             c.verbose(format!(
                 "{} storeys of {} × {} rooms, {} faces, {} vertices; seed {}",

@@ -30,6 +30,9 @@
 //!   displaced 2 cm, so two sides are not planar;
 //! * **vaulted ceilings** in some rooms: a barrel of twisted (non-planar)
 //!   quads under the slab, springing from the side walls;
+//! * **stairs and ramps** (with [`Cad::stairs`]): steps as boxes from the
+//!   floor, each overlapping the next, up to a landing; ramps as wedges whose
+//!   slope meets the floor at 2.9–7.1°;
 //! * **lights**: a panel flush with the ceiling (coplanar with it, facing
 //!   down) or a **hanging light box** (its underside emits);
 //! * and over everything: faces **flipped** at random, **duplicate faces**
@@ -103,6 +106,12 @@ pub struct Cad {
     /// the ridge, eaves overhanging the walls and crossing the top slab's
     /// edge, and gable walls whose slanted edges run into the roof.
     pub pitched: bool,
+    /// Stairs and ramps in about half the rooms, along the room's −x wall
+    /// and pushed into it: a flight of steps, each a box from the floor
+    /// (sunk into it) overlapping the next, up to a landing box; or a ramp,
+    /// a wedge rising at 1:20 to 1:8 (2.9–7.1°), so its slope meets the
+    /// floor at a shallow angle, up to a landing.
+    pub stairs: bool,
 }
 
 impl Default for Cad {
@@ -126,6 +135,7 @@ impl Default for Cad {
             triangles: false,
             wing: false,
             pitched: false,
+            stairs: false,
         }
     }
 }
@@ -169,6 +179,7 @@ mod stream {
     pub const JITTER: u64 = 107;
     pub const WING: u64 = 108;
     pub const ROOF: u64 = 109;
+    pub const STAIRS: u64 = 110;
 }
 
 struct B {
@@ -551,6 +562,12 @@ pub fn cad(cfg: &Cad, seed: u64) -> Model {
     for room in &rooms {
         room_contents(&mut b, cfg, room, &mut rr, &mut rf);
     }
+    if cfg.stairs {
+        let mut rs = Rng::new(seed, stream::STAIRS);
+        for room in &rooms {
+            stairs(&mut b, room, &mut rs);
+        }
+    }
     if cfg.wing {
         let mut rw = Rng::new(seed, stream::WING);
         wing(&mut b, cfg, (nx, ny), (x1, y0, y1), &mut rw, seed);
@@ -840,6 +857,92 @@ fn pitched_roof(b: &mut B, lo: DVec2, hi: DVec2, ztop: f64, r: &mut Rng) {
         ];
         let off = w(a0, bb + WALL_OUT, 0.0) - w(a0, bb, 0.0);
         b.prism(n, &base, off, b.mats.facade, slab);
+    }
+}
+
+/// A flight of steps or a ramp along the room's −x wall, in about half the
+/// rooms (see [`Cad::stairs`]).
+fn stairs(b: &mut B, room: &Room, r: &mut Rng) {
+    if !pick(r, 0.5) {
+        return;
+    }
+    let zf = room.s as f64 * STOREY;
+    let name = format!("s{}r{}_{}", room.s, room.i, room.j);
+    let (ilo, ihi) = (room.ilo, room.ihi);
+    // Pushed into the wall, sunk into the floor (or standing on it).
+    let x0 = ilo.x - r.range(0.0, 0.03);
+    let x1 = ilo.x + r.range(0.9, 1.2);
+    let sink = if pick(r, 0.3) {
+        0.0
+    } else {
+        r.range(0.003, 0.02)
+    };
+    let z0 = zf - sink;
+    let mat = [b.mats.wood; 6];
+    // Rising towards +y or −y; `at(d)` is the y a distance d along it.
+    let up = pick(r, 0.5);
+    let (ya, yb) = (ilo.y + 0.1, ihi.y - 0.1);
+    let at = |d: f64| if up { ya + d } else { yb - d };
+    let span = |d0: f64, d1: f64| (at(d0).min(at(d1)), at(d0).max(at(d1)));
+    let landing = 1.0;
+    if pick(r, 0.5) {
+        let (rise, going) = (r.range(0.15, 0.19), r.range(0.25, 0.3));
+        let room_for = ((yb - ya - landing) / going).floor().max(0.0) as usize;
+        let n = room_for.min(7);
+        if n < 2 {
+            return;
+        }
+        for k in 0..n {
+            // Each step reaches a little under the next (or exactly to it).
+            let over = if pick(r, 0.3) {
+                0.0
+            } else {
+                r.range(0.01, 0.05)
+            };
+            let (lo, hi) = span(k as f64 * going, (k + 1) as f64 * going + over);
+            b.aabb(
+                &format!("{name}st{k}"),
+                DVec3::new(x0, lo, z0),
+                DVec3::new(x1, hi, zf + (k + 1) as f64 * rise),
+                mat,
+            );
+        }
+        let d = n as f64 * going;
+        let (lo, hi) = span(d - r.range(0.0, 0.05), d + landing);
+        b.aabb(
+            &format!("{name}sl"),
+            DVec3::new(x0, lo, z0),
+            DVec3::new(x1, hi, zf + n as f64 * rise),
+            mat,
+        );
+    } else {
+        let slope = r.range(1.0 / 20.0, 1.0 / 8.0);
+        let run = (yb - ya - landing).min(1.2 / slope);
+        if run < 1.0 {
+            return;
+        }
+        // The top, from the wedge's (possibly sunk) foot.
+        let h = z0 + run * slope - zf;
+        // A wedge with a flat bottom: sunk, its slope crosses the floor a
+        // little way up (sink / slope); standing on it, its foot rests on
+        // the floor along an edge.
+        let p = |d: f64, z: f64| DVec3::new(x0, at(d), z);
+        let base = [p(0.0, z0), p(run, zf + h), p(run, z0)];
+        b.prism(
+            &format!("{name}ramp"),
+            &base,
+            DVec3::new(x1 - x0, 0.0, 0.0),
+            b.mats.wood,
+            b.mats.wood,
+        );
+        // The landing's top a hair above or below the ramp's end.
+        let (lo, hi) = span(run - r.range(0.0, 0.05), run + landing);
+        b.aabb(
+            &format!("{name}rl"),
+            DVec3::new(x0, lo, z0),
+            DVec3::new(x1, hi, zf + h + r.range(-0.003, 0.003)),
+            mat,
+        );
     }
 }
 

@@ -469,3 +469,74 @@ fn the_wing_and_the_pitched_roof_are_closed_planar_solids_at_an_angle() {
         assert!(r.count("intersect") > 0);
     }
 }
+
+/// `--stairs`: every step, landing and ramp is a closed, outward, planar
+/// solid; flights and ramps both occur over a few seeds; each ramp's slope
+/// meets the floor at 2.9–7.1°; the steps overlap or abut the next one.
+#[test]
+fn stairs_and_ramps_are_closed_solids_and_ramps_are_shallow() {
+    let (mut flights, mut ramps) = (0, 0);
+    for seed in 1..=12 {
+        let cfg = Cad {
+            jitter: 0.0,
+            flipped: 0.0,
+            duplicates: 0.0,
+            stairs: true,
+            ..Cad::default()
+        };
+        let m = cad(&cfg, seed);
+        let mut solids: HashMap<String, Vec<&Face>> = HashMap::new();
+        for f in &m.faces {
+            let name = f.name.as_deref().unwrap();
+            let solid = name.split('.').next().unwrap();
+            let kind = solid.trim_start_matches(|c: char| c != '_');
+            let kind = kind.trim_start_matches(|c: char| c == '_' || c.is_ascii_digit());
+            if kind.starts_with("st")
+                || kind.starts_with("sl")
+                || kind.starts_with("ramp")
+                || kind == "rl"
+            {
+                solids.entry(solid.to_string()).or_default().push(f);
+            }
+        }
+        let normal = |f: &Face| {
+            let p: Vec<DVec3> = f.contours[0].iter().map(|&v| m.pos(v)).collect();
+            geom::newell_normal(&p).normalize()
+        };
+        for (name, faces) in &solids {
+            let mut vol = 0.0;
+            for f in faces {
+                let p: Vec<DVec3> = f.contours[0].iter().map(|&v| m.pos(v)).collect();
+                let n = normal(f);
+                for q in &p {
+                    assert!((q - p[0]).dot(n).abs() < 1e-9, "{name} not planar");
+                }
+                for i in 1..p.len() - 1 {
+                    vol += p[0].dot(p[i].cross(p[i + 1])) / 6.0;
+                }
+            }
+            assert!(vol > 0.0, "seed {seed}: {name} faces inward");
+            if name.ends_with("ramp") {
+                ramps += 1;
+                assert_eq!(faces.len(), 5, "{name}: a wedge");
+                let slope = faces
+                    .iter()
+                    .map(|f| normal(f))
+                    .filter(|n| n.z > 0.0)
+                    .map(|n| n.z.acos().to_degrees())
+                    .fold(f64::NAN, f64::max);
+                assert!(
+                    (2.8..=7.2).contains(&slope),
+                    "seed {seed}: {name} at {slope}°"
+                );
+            }
+            if name.ends_with("st0") {
+                flights += 1;
+            }
+        }
+    }
+    assert!(
+        flights >= 3 && ramps >= 3,
+        "{flights} flights, {ramps} ramps"
+    );
+}

@@ -309,17 +309,6 @@ impl FaceGeom {
     }
 }
 
-/// Where a face's vertices lie against the other face's plane.
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Side {
-    /// All on one side, none within epsilon.
-    Clear,
-    /// On one side, some within epsilon: the face rests on the plane.
-    Rests,
-    /// On both sides, or not looked at (a big face's far edges).
-    Unknown,
-}
-
 fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
     if coplanar(a, b, eps) {
         return LineCase::Coplanar;
@@ -336,16 +325,20 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
     }
     let ea = a.edges_near(lo, hi);
     let eb = b.edges_near(lo, hi);
-    // Which side of the other's plane a face's vertices lie on (decided on
-    // the whole face, so only for faces whose edges are all at hand).
-    let side = |g: &FaceGeom, other: &FaceGeom, edges: &[(u32, u32)]| {
+    // A face all on one side of the other's plane (decided on the whole
+    // face, so only for faces whose edges are all at hand).
+    let one_side = |g: &FaceGeom, other: &FaceGeom, edges: &[(u32, u32)]| {
         let total: usize = g.contours.iter().map(Vec::len).sum();
         if edges.len() != total {
-            return Side::Unknown;
+            return false;
         }
+        let d = g
+            .contours
+            .iter()
+            .flatten()
+            .map(|&p| snap(other.plane.dist(p), eps));
         let (mut pos, mut neg, mut zero) = (false, false, false);
-        for &p in g.contours.iter().flatten() {
-            let x = snap(other.plane.dist(p), eps);
+        for x in d {
             if x > 0.0 {
                 pos = true;
             } else if x < 0.0 {
@@ -354,14 +347,9 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
                 zero = true;
             }
         }
-        match (pos != neg, zero) {
-            (true, false) => Side::Clear,
-            (true, true) => Side::Rests,
-            _ => Side::Unknown,
-        }
+        !zero && (pos != neg)
     };
-    let (sa, sb) = (side(a, b, &ea), side(b, a, &eb));
-    if sa == Side::Clear || sb == Side::Clear {
+    if one_side(b, a, &eb) || one_side(a, b, &ea) {
         return LineCase::Disjoint;
     }
     let (n1, n2) = (a.plane.n, b.plane.n);
@@ -372,41 +360,46 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
     }
     let mut p0 = (n2.cross(u) * a.plane.d + u.cross(n1) * b.plane.d) / uu;
     let mut dir = u / uu.sqrt();
-    // A face resting on the other's plane (on one side of it, some
-    // vertices within epsilon) meets it only at those vertices and the
-    // edges between them: the line runs through their feet on the other
-    // plane (so that a cut there stays in that plane, as the planes' line
-    // does). The planes' line is off by up to epsilon / sin θ, several
-    // epsilons where the faces meet at a shallow angle (a table leg
-    // standing on a column's face tilted by 0.4°, their shared edge then
-    // seemed to run 2 epsilon inside both faces: an intersection no cut
-    // could resolve).
-    let resting = if sa == Side::Rests {
-        Some((a, b))
-    } else if sb == Side::Rests {
-        Some((b, a))
-    } else {
-        None
-    };
-    if let Some((g, other)) = resting {
-        let zeros = g.contours.iter().flatten().filter_map(|&p| {
-            let d = other.plane.dist(p);
-            (d.abs() <= eps).then(|| p - other.plane.n * d)
-        });
-        let (mut lo, mut hi) = ((f64::INFINITY, p0), (f64::NEG_INFINITY, p0));
-        for p in zeros {
-            let t = (p - p0).dot(dir);
-            if t < lo.0 {
-                lo = (t, p);
-            }
-            if t > hi.0 {
-                hi = (t, p);
+    // Where the planes meet at a shallow angle, their line is off by up to
+    // epsilon / sin θ: several epsilons (a table leg standing on a
+    // column's face tilted by 0.4°, the two sharing an edge: the planes'
+    // line ran 2 epsilon inside both faces, an intersection no cut could
+    // resolve). A vertex of either face within epsilon of both planes lies
+    // on the line within tolerance, so the line runs through such
+    // vertices (their feet on the other face's plane, so that a cut stays
+    // in the plane of the face it cuts), the two farthest apart along it.
+    // Only below 14.5° (sin θ < 1/4): at steeper angles the planes' line
+    // is within 4 plane errors of where one face really crosses the
+    // other's plane, and that is where it must be cut (a wing's side face
+    // resting on a wall's end at 56°, the end poking 3 epsilon through the
+    // side: cut along the side's edge instead, the end's piece still
+    // crossed it; dirty-building seeds 10015, 10354, 11293, 11335, 11822).
+    if uu < 1.0 / 16.0 {
+        let mut ends: Option<((f64, DVec3), (f64, DVec3))> = None;
+        for (g, other, edges) in [(a, b, &ea), (b, a, &eb)] {
+            for &(ci, i) in edges.iter() {
+                let p = g.contours[ci as usize][i as usize];
+                let d = other.plane.dist(p);
+                if d.abs() > eps || g.plane.dist(p).abs() > eps {
+                    continue;
+                }
+                let q = p - other.plane.n * d;
+                let t = (q - p0).dot(dir);
+                let (lo, hi) = ends.get_or_insert(((t, q), (t, q)));
+                if t < lo.0 {
+                    *lo = (t, q);
+                }
+                if t > hi.0 {
+                    *hi = (t, q);
+                }
             }
         }
-        if hi.0 - lo.0 > 2.0 * eps {
-            dir = (hi.1 - lo.1).normalize();
+        if let Some((lo, hi)) = ends {
+            if hi.0 - lo.0 > 2.0 * eps {
+                dir = (hi.1 - lo.1).normalize();
+            }
+            p0 = lo.1;
         }
-        p0 = lo.1;
     }
     // Each boundary event: where along the line, and the point: an edge's
     // crossing of the other plane itself, computed from the edge with its
@@ -571,10 +564,10 @@ mod tests {
     }
 
     /// A face resting on another's plane at a shallow angle: the line
-    /// they meet in runs through its resting vertices, not along the
-    /// planes' line (2 epsilon off here, which made the pair of dirty
-    /// building seed 11847, a table leg on a column face tilted by 0.4°
-    /// sharing an edge with it, seem to intersect).
+    /// they meet in runs through the vertices on both planes (the edge
+    /// they share), not along the planes' line (2 epsilon off here, which
+    /// made the pair of dirty building seed 11847, a table leg on a column
+    /// face tilted by 0.4° sharing an edge with it, seem to intersect).
     #[test]
     fn resting_at_a_shallow_angle() {
         let p = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
@@ -624,6 +617,37 @@ mod tests {
         };
         assert!((a - p(1., 1., 0.)).length() < 1e-12, "{a}");
         assert!((b - p(3., 1., 0.)).length() < 1e-12, "{b}");
+    }
+
+    /// Seed 2615 (with stairs): a ramp's slope at 4° and the piece of a
+    /// box's bottom it was cut from, which wraps round the ramp's side, so
+    /// that neither lies on one side of the other. They share an edge and
+    /// touch; the planes' line is 1.4 epsilon off that edge.
+    #[test]
+    fn sharing_an_edge_at_a_shallow_angle_when_neither_rests() {
+        let p = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+        let bottom = FaceGeom::new(vec![vec![
+            p(0.10499917237331989, 0.25989685733555684, 2.9911432228350265),
+            p(0.10499894965394609, 1.1598980704468014, 2.991143856501989),
+            p(0.12423570220526307, 1.1598980964237116, 2.991143865576042),
+            p(0.12423540759829599, 0.2708302096577228, 2.991143659007495),
+            p(0.605000286623535, 0.270849296576645, 2.9911450407049296),
+            p(0.6050003017826061, 0.25989854792122286, 2.991145052386116),
+        ]])
+        .unwrap();
+        let ramp = FaceGeom::new(vec![vec![
+            p(0.12423540461668287, 0.22500070118119836, 2.987921140232155),
+            p(1.170105269107447, 0.2250006548221171, 2.987921175223919),
+            p(1.1701052736166762, 0.3967810679949891, 2.9999999098961223),
+            p(0.6050001139147175, 0.3967780996976585, 2.999999549756932),
+            p(0.605000286623535, 0.270849296576645, 2.9911450407049296),
+            p(0.12423540759829599, 0.2708302096577228, 2.991143659007495),
+        ]])
+        .unwrap();
+        let eps = 1.1036686653305318e-5;
+        assert_eq!(relate(&bottom, &ramp, eps), Relation::Touch);
+        assert_eq!(relate(&ramp, &bottom, eps), Relation::Touch);
+        assert!(cut_segments(&bottom, &ramp, eps).is_empty());
     }
 
     #[test]
