@@ -434,6 +434,31 @@ fn coincident_step_checked(path: &str, eps: &str) -> (String, serde_json::Value)
     (out, r)
 }
 
+/// A pair's moves that are left after others are vetoed must not bend the
+/// kept face either (fixtures/clean/vetoed-corners-bend-a-desk-bottom.ug,
+/// property seed 1693): before, three of five corners took the twin's
+/// records and the piece was non-planar by 1.0 epsilon after ugclean.
+#[test]
+fn moves_left_after_vetoes_bend_no_face() {
+    let (out, r) = coincident_step_checked(
+        "clean/vetoed-corners-bend-a-desk-bottom.ug",
+        "1.4867539729602339e-5",
+    );
+    for key in [
+        "degenerate",
+        "intersecting",
+        "tvertices",
+        "nonplanar",
+        "overlapping",
+        "coincident",
+    ] {
+        assert_eq!(r[key].as_array().unwrap().len(), 0, "{key}:\n{out}");
+    }
+    // The pair is still resolved: the later face of the same material goes.
+    assert!(out.contains("f s0r2_1f0.0.i1 "), "{out}");
+    assert!(!out.contains("f s0r2_1f1.0.c2 "), "{out}");
+}
+
 /// A coincident pair's corners 1.01 epsilon apart joined into one record
 /// (fixtures/clean/joined-corner-on-an-edge.ug, from property seed 22 on 3 × 2
 /// rooms, a triangle export with an oblique wing): the face beside them
