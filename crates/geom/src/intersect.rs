@@ -220,21 +220,29 @@ const POINT_CUTS: bool = false;
 
 /// Classifies the pair (a, b) with distance tolerance `eps`.
 pub fn relate(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Relation {
-    let (p0, dir, ts) = match line_of(a, b, eps) {
+    let (p0, dir, ts, near) = match line_of(a, b, eps) {
         LineCase::Coplanar => return Relation::Coplanar,
         LineCase::Disjoint => return Relation::Disjoint,
-        LineCase::Line { p0, dir, ts, .. } => (p0, dir, ts),
+        LineCase::Line {
+            p0, dir, ts, near, ..
+        } => (p0, dir, ts, near),
     };
+    // Each boundary point itself (a vertex within epsilon of the other
+    // plane is tried where it is, not at its foot on the line, which may
+    // lie epsilon / sin θ away: a ramp at 6.4° sharing a zigzag edge with
+    // tiles, whose joint's vertex was 1.05 epsilon from the line and its
+    // foot inside the ramp, property seed 8666 with stairs), and the
+    // middle of each stretch of the line between them, as `cut_segments`
+    // tries it.
     let mut samples = Vec::with_capacity(ts.len() * 2);
     for (k, &t) in ts.iter().enumerate() {
-        samples.push(t);
+        samples.push(near[k]);
         if let Some(&t2) = ts.get(k + 1) {
-            samples.push((t + t2) / 2.0);
+            samples.push(p0 + dir * ((t + t2) / 2.0));
         }
     }
     let mut touch = false;
-    for t in samples {
-        let s = p0 + dir * t;
+    for s in samples {
         let la = a.locate(s, eps);
         if la == Location::Outside {
             continue;
@@ -267,6 +275,9 @@ enum LineCase {
         dir: DVec3,
         ts: Vec<f64>,
         at: Vec<DVec3>,
+        /// The boundary points themselves: the vertex, where `at` is its
+        /// foot on the line; the crossing, as `at`.
+        near: Vec<DVec3>,
     },
 }
 
@@ -405,7 +416,7 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
     // crossing of the other plane itself, computed from the edge with its
     // end points in one order, so the faces that share the edge find the
     // same point.
-    let mut ev: Vec<(f64, DVec3)> = Vec::new();
+    let mut ev: Vec<(f64, DVec3, DVec3)> = Vec::new();
     for (g, other, edges) in [(a, b, &ea), (b, a, &eb)] {
         for &(ci, i) in edges {
             let c = &g.contours[ci as usize];
@@ -421,7 +432,7 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
                 // line is several epsilons along the face from a vertex
                 // only an epsilon off the plane).
                 let t = (p - p0).dot(dir);
-                ev.push((t, p0 + dir * t));
+                ev.push((t, p0 + dir * t, p));
             } else if dp * dq < 0.0 {
                 let (p, q, dp, dq) = if p.to_array() <= q.to_array() {
                     (p, q, dp, dq)
@@ -429,7 +440,7 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
                     (q, p, dq, dp)
                 };
                 let x = p + (q - p) * (dp / (dp - dq));
-                ev.push(((x - p0).dot(dir), x));
+                ev.push(((x - p0).dot(dir), x, x));
             }
         }
     }
@@ -438,8 +449,16 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
     }
     ev.sort_by(|x, y| x.0.total_cmp(&y.0));
     ev.dedup_by(|x, y| (x.0 - y.0).abs() <= eps);
-    let (ts, at) = ev.into_iter().unzip();
-    LineCase::Line { p0, dir, ts, at }
+    let ts = ev.iter().map(|e| e.0).collect();
+    let at = ev.iter().map(|e| e.1).collect();
+    let near = ev.iter().map(|e| e.2).collect();
+    LineCase::Line {
+        p0,
+        dir,
+        ts,
+        at,
+        near,
+    }
 }
 
 /// Where two faces that are not coplanar cut each other: the segments of
@@ -460,7 +479,9 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
 /// Empty for disjoint, touching or coplanar faces.
 pub fn cut_segments(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Vec<(DVec3, DVec3)> {
     let (p0, dir, ts, at) = match line_of(a, b, eps) {
-        LineCase::Line { p0, dir, ts, at } => (p0, dir, ts, at),
+        LineCase::Line {
+            p0, dir, ts, at, ..
+        } => (p0, dir, ts, at),
         _ => return Vec::new(),
     };
     // Stretches between boundary events, as indices into `ts`.
@@ -723,5 +744,52 @@ mod tests {
         for (p, q) in c {
             assert!(((p - q).length() - 1.0).abs() < 1e-12);
         }
+    }
+    /// Seed 8666 (3 × 2 rooms with stairs): a sunk ramp's slope at 6.4°
+    /// and the tile beside it share an edge that zigzags by 1 epsilon (the
+    /// tiles' jittered joints snapped into it). The joint's vertex lies
+    /// 1.05 epsilon off the line, its foot inside the ramp: it is tried
+    /// where it is, a vertex of both.
+    #[test]
+    fn a_zigzag_edge_at_a_shallow_angle_is_touched_at_its_vertices() {
+        let p = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+        let tile = FaceGeom::new(vec![vec![
+            p(5.210182455286792, 3.724999759608996, 1.6928552673438776e-6),
+            p(5.810179976732396, 3.725001832092634, 5.2601993146256396e-8),
+            p(5.810181404438861, 3.9508202350427557, 1.3063250919804747e-6),
+            p(4.911667225236716, 3.950820622159642, -4.091659438729043e-7),
+            p(
+                4.615513138425262,
+                3.9508206398479584,
+                -4.0784917340608295e-7,
+            ),
+            p(4.6101805698079845, 3.9508211050959607, -9.84780366146047e-7),
+            p(
+                4.610182213639535,
+                3.9491621195024043,
+                -4.0771756149027283e-7,
+            ),
+            p(4.610180629502439, 3.7170624424613363, -8.095069061531819e-7),
+            p(4.699894183508592, 3.7170584033215697, -3.763839943545435e-7),
+            p(5.210182426927702, 3.717035382475538, 1.6754777382987164e-6),
+        ]])
+        .unwrap();
+        let ramp = FaceGeom::new(vec![vec![
+            p(
+                5.6845235771963205,
+                3.7170493726834897,
+                -3.973921736122321e-7,
+            ),
+            p(5.684523642684133, 3.850821089209664, -0.01505292154925709),
+            p(4.610182371284238, 3.850820197539395, -0.015051695358403495),
+            p(4.610180629502439, 3.7170624424613363, -8.095069061531819e-7),
+            p(4.699894183508592, 3.7170584033215697, -3.763839943545435e-7),
+            p(5.210182426927702, 3.717035382475538, 1.6754777382987164e-6),
+        ]])
+        .unwrap();
+        let eps = 1.892096550653604e-5;
+        assert_eq!(relate(&tile, &ramp, eps), Relation::Touch);
+        assert_eq!(relate(&ramp, &tile, eps), Relation::Touch);
+        assert!(cut_segments(&tile, &ramp, eps).is_empty());
     }
 }
