@@ -220,23 +220,29 @@ const POINT_CUTS: bool = false;
 
 /// Classifies the pair (a, b) with distance tolerance `eps`.
 pub fn relate(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Relation {
-    let (p0, dir, ts, near) = match line_of(a, b, eps) {
+    let (p0, dir, ts, near, anchored) = match line_of(a, b, eps) {
         LineCase::Coplanar => return Relation::Coplanar,
         LineCase::Disjoint => return Relation::Disjoint,
         LineCase::Line {
-            p0, dir, ts, near, ..
-        } => (p0, dir, ts, near),
+            p0,
+            dir,
+            ts,
+            near,
+            anchored,
+            ..
+        } => (p0, dir, ts, near, anchored),
     };
-    // Each boundary point itself (a vertex within epsilon of the other
-    // plane is tried where it is, not at its foot on the line, which may
-    // lie epsilon / sin θ away: a ramp at 6.4° sharing a zigzag edge with
-    // tiles, whose joint's vertex was 1.05 epsilon from the line and its
-    // foot inside the ramp, property seed 8666 with stairs), and the
-    // middle of each stretch of the line between them, as `cut_segments`
-    // tries it.
+    // Each boundary point, and the middle of each stretch of the line
+    // between them, as `cut_segments` tries it. Where the line runs
+    // through vertices on both planes (a shallow angle), a vertex within
+    // epsilon of the other plane is tried where it is, not at its foot on
+    // the line, which may lie epsilon / sin θ away (a ramp at 6.4°
+    // sharing a zigzag edge with tiles, whose joint's vertex was 1.05
+    // epsilon from the line and its foot inside the ramp: property seed
+    // 8666 with stairs).
     let mut samples = Vec::with_capacity(ts.len() * 2);
     for (k, &t) in ts.iter().enumerate() {
-        samples.push(near[k]);
+        samples.push(if anchored { near[k] } else { p0 + dir * t });
         if let Some(&t2) = ts.get(k + 1) {
             samples.push(p0 + dir * ((t + t2) / 2.0));
         }
@@ -278,6 +284,9 @@ enum LineCase {
         /// The boundary points themselves: the vertex, where `at` is its
         /// foot on the line; the crossing, as `at`.
         near: Vec<DVec3>,
+        /// Whether the line was taken through vertices on both planes (a
+        /// shallow angle; see `line_of`).
+        anchored: bool,
     },
 }
 
@@ -378,38 +387,55 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
     // resolve). A vertex of either face within epsilon of both planes lies
     // on the line within tolerance, so the line runs through such
     // vertices (their feet on the other face's plane, so that a cut stays
-    // in the plane of the face it cuts), the two farthest apart along it.
+    // in the plane of the face it cuts), the two farthest apart along it,
+    // when they all lie within 4 epsilon of one line.
     // Only below 14.5° (sin θ < 1/4): at steeper angles the planes' line
     // is within 4 plane errors of where one face really crosses the
     // other's plane, and that is where it must be cut (a wing's side face
     // resting on a wall's end at 56°, the end poking 3 epsilon through the
     // side: cut along the side's edge instead, the end's piece still
     // crossed it; dirty-building seeds 10015, 10354, 11293, 11335, 11822).
+    let mut anchored = false;
     if uu < 1.0 / 16.0 {
-        let mut ends: Option<((f64, DVec3), (f64, DVec3))> = None;
+        let mut on_both: Vec<(f64, DVec3)> = Vec::new();
         for (g, other, edges) in [(a, b, &ea), (b, a, &eb)] {
             for &(ci, i) in edges.iter() {
                 let p = g.contours[ci as usize][i as usize];
                 let d = other.plane.dist(p);
-                if d.abs() > eps || g.plane.dist(p).abs() > eps {
-                    continue;
-                }
-                let q = p - other.plane.n * d;
-                let t = (q - p0).dot(dir);
-                let (lo, hi) = ends.get_or_insert(((t, q), (t, q)));
-                if t < lo.0 {
-                    *lo = (t, q);
-                }
-                if t > hi.0 {
-                    *hi = (t, q);
+                if d.abs() <= eps && g.plane.dist(p).abs() <= eps {
+                    let q = p - other.plane.n * d;
+                    on_both.push(((q - p0).dot(dir), q));
                 }
             }
         }
-        if let Some((lo, hi)) = ends {
-            if hi.0 - lo.0 > 2.0 * eps {
-                dir = (hi.1 - lo.1).normalize();
+        // The first found of each extreme.
+        let mut ends: Option<((f64, DVec3), (f64, DVec3))> = None;
+        for &(t, q) in &on_both {
+            let (lo, hi) = ends.get_or_insert(((t, q), (t, q)));
+            if t < lo.0 {
+                *lo = (t, q);
             }
-            p0 = lo.1;
+            if t > hi.0 {
+                *hi = (t, q);
+            }
+        }
+        if let Some((lo, hi)) = ends {
+            let dir2 = if hi.0 - lo.0 > 2.0 * eps {
+                (hi.1 - lo.1).normalize()
+            } else {
+                dir
+            };
+            // They must lie along one line: vertices on both planes that
+            // span an area (a rug's piece sharing a triangle 6.8 mm wide
+            // with the tile under it, tilted apart by jitter) make the
+            // faces coplanar there, which is ugcopl's to resolve; the
+            // planes' line is kept.
+            let off = |q: DVec3| (q - lo.1).reject_from_normalized(dir2).length();
+            if on_both.iter().all(|&(_, q)| off(q) <= 4.0 * eps) {
+                dir = dir2;
+                p0 = lo.1;
+                anchored = true;
+            }
         }
     }
     // Each boundary event: where along the line, and the point: an edge's
@@ -458,6 +484,7 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
         ts,
         at,
         near,
+        anchored,
     }
 }
 
