@@ -367,6 +367,22 @@ fn a_pier_end_poking_through_the_facade_is_enclosed() {
     }
 }
 
+/// A piece of a sunk ramp's slope inside the slab, 0.01 to 0.14 mm under
+/// the floor (fixtures/clean/ramp-piece-under-the-floor.ug, after the
+/// 40,000-face CAD building with stairs): the enclosed step once lifted a
+/// sample point of it through the floor into the lit room, and the inside
+/// of the slab joined the room; now it goes, and nothing else does.
+#[test]
+fn a_sample_is_not_lifted_through_a_face_it_lies_behind() {
+    let src = std::fs::read_to_string(fixture("clean/ramp-piece-under-the-floor.ug")).unwrap();
+    let out = run_ok("ugclean", &[], Some(src.as_bytes()));
+    let (before, after) = (faces(&src), faces(&out));
+    assert!(before.contains(&"ramp".to_string()));
+    let gone: Vec<&String> = before.iter().filter(|f| !after.contains(f)).collect();
+    assert_eq!(gone, [&"ramp".to_string()], "{out}");
+    assert_eq!(check(&out)["inconsistent"].as_array().unwrap().len(), 0);
+}
+
 /// A tent (a contour vertex 0.75 epsilon off the chord, 1.7 epsilon long,
 /// between its neighbours: fixtures/cut/tent-on-a-tile-side.ug, from the
 /// chain's output on the 30,000-face CAD building, seed 2): ugcheck counts
