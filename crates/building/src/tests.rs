@@ -437,23 +437,9 @@ fn the_wing_and_the_pitched_roof_are_closed_planar_solids_at_an_angle() {
             }
         }
         assert_eq!(solids.len(), 9, "seed {seed}");
-        let normal = |f: &Face| {
-            let p: Vec<DVec3> = f.contours[0].iter().map(|&v| m.pos(v)).collect();
-            geom::newell_normal(&p).normalize()
-        };
+        let normal = |f: &Face| face_normal(&m, f);
         for (name, faces) in &solids {
-            let mut vol = 0.0;
-            for f in faces {
-                let p: Vec<DVec3> = f.contours[0].iter().map(|&v| m.pos(v)).collect();
-                let n = normal(f);
-                for q in &p {
-                    assert!((q - p[0]).dot(n).abs() < 1e-9, "{name} not planar");
-                }
-                for i in 1..p.len() - 1 {
-                    vol += p[0].dot(p[i].cross(p[i + 1])) / 6.0;
-                }
-            }
-            assert!(vol > 0.0, "seed {seed}: {name} faces inward");
+            assert_planar_and_outward(&m, faces, &format!("seed {seed}: {name}"));
         }
         // The side walls' long faces are off every axis in plan.
         let side = normal(solids["wing0"][2]);
@@ -499,23 +485,9 @@ fn stairs_and_ramps_are_closed_solids_and_ramps_are_shallow() {
                 solids.entry(solid.to_string()).or_default().push(f);
             }
         }
-        let normal = |f: &Face| {
-            let p: Vec<DVec3> = f.contours[0].iter().map(|&v| m.pos(v)).collect();
-            geom::newell_normal(&p).normalize()
-        };
+        let normal = |f: &Face| face_normal(&m, f);
         for (name, faces) in &solids {
-            let mut vol = 0.0;
-            for f in faces {
-                let p: Vec<DVec3> = f.contours[0].iter().map(|&v| m.pos(v)).collect();
-                let n = normal(f);
-                for q in &p {
-                    assert!((q - p[0]).dot(n).abs() < 1e-9, "{name} not planar");
-                }
-                for i in 1..p.len() - 1 {
-                    vol += p[0].dot(p[i].cross(p[i + 1])) / 6.0;
-                }
-            }
-            assert!(vol > 0.0, "seed {seed}: {name} faces inward");
+            assert_planar_and_outward(&m, faces, &format!("seed {seed}: {name}"));
             if name.ends_with("ramp") {
                 ramps += 1;
                 assert_eq!(faces.len(), 5, "{name}: a wedge");
@@ -539,4 +511,27 @@ fn stairs_and_ramps_are_closed_solids_and_ramps_are_shallow() {
         flights >= 3 && ramps >= 3,
         "{flights} flights, {ramps} ramps"
     );
+}
+
+/// A face's unit normal (Newell's, over its outer contour).
+fn face_normal(m: &Model, f: &Face) -> DVec3 {
+    let p: Vec<DVec3> = f.contours[0].iter().map(|&v| m.pos(v)).collect();
+    geom::newell_normal(&p).normalize()
+}
+
+/// The faces of one solid: each planar, and together enclosing a positive
+/// volume (facing outward).
+fn assert_planar_and_outward(m: &Model, faces: &[&Face], what: &str) {
+    let mut vol = 0.0;
+    for f in faces {
+        let p: Vec<DVec3> = f.contours[0].iter().map(|&v| m.pos(v)).collect();
+        let n = face_normal(m, f);
+        for q in &p {
+            assert!((q - p[0]).dot(n).abs() < 1e-9, "{what} not planar");
+        }
+        for i in 1..p.len() - 1 {
+            vol += p[0].dot(p[i].cross(p[i + 1])) / 6.0;
+        }
+    }
+    assert!(vol > 0.0, "{what} faces inward");
 }
