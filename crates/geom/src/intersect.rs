@@ -220,17 +220,12 @@ const POINT_CUTS: bool = false;
 
 /// Classifies the pair (a, b) with distance tolerance `eps`.
 pub fn relate(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Relation {
-    let (p0, dir, ts, near, anchored) = match line_of(a, b, eps) {
+    let (p0, dir, ts, near) = match line_of(a, b, eps) {
         LineCase::Coplanar => return Relation::Coplanar,
         LineCase::Disjoint => return Relation::Disjoint,
         LineCase::Line {
-            p0,
-            dir,
-            ts,
-            near,
-            anchored,
-            ..
-        } => (p0, dir, ts, near, anchored),
+            p0, dir, ts, near, ..
+        } => (p0, dir, ts, near),
     };
     // Each boundary point, and the middle of each stretch of the line
     // between them, as `cut_segments` tries it. Where the line runs
@@ -242,7 +237,7 @@ pub fn relate(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Relation {
     // 8666 with stairs).
     let mut samples = Vec::with_capacity(ts.len() * 2);
     for (k, &t) in ts.iter().enumerate() {
-        samples.push(if anchored { near[k] } else { p0 + dir * t });
+        samples.push(near[k]);
         if let Some(&t2) = ts.get(k + 1) {
             samples.push(p0 + dir * ((t + t2) / 2.0));
         }
@@ -281,12 +276,10 @@ enum LineCase {
         dir: DVec3,
         ts: Vec<f64>,
         at: Vec<DVec3>,
-        /// The boundary points themselves: the vertex, where `at` is its
-        /// foot on the line; the crossing, as `at`.
+        /// Where `relate` tries each boundary point: the vertex itself
+        /// when the line was taken through vertices on both planes (a
+        /// shallow angle), else as `at`.
         near: Vec<DVec3>,
-        /// Whether the line was taken through vertices on both planes (a
-        /// shallow angle; see `line_of`).
-        anchored: bool,
     },
 }
 
@@ -461,7 +454,8 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
                 // line is several epsilons along the face from a vertex
                 // only an epsilon off the plane).
                 let t = (p - p0).dot(dir);
-                ev.push((t, p0 + dir * t, p));
+                let foot = p0 + dir * t;
+                ev.push((t, foot, if anchored { p } else { foot }));
             } else if dp * dq < 0.0 {
                 let (p, q, dp, dq) = if p.to_array() <= q.to_array() {
                     (p, q, dp, dq)
@@ -487,7 +481,6 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
         ts,
         at,
         near,
-        anchored,
     }
 }
 
