@@ -369,3 +369,47 @@ fn a_sliver_piece_wider_than_epsilon_is_kept() {
     assert_eq!(count(&after, "inconsistent"), 4, "{out}");
     assert_eq!(count(&after, "degenerate"), 0, "{out}");
 }
+
+/// A wall standing under a ceiling whose piece ugcopl cuts with a corner
+/// 1.5 epsilon below the wall's top corner
+/// (fixtures/copl/wall-through-a-ceiling-cut-below-its-top.ug, from the
+/// property's seed 1042, a triangle export with a wing): the wall then
+/// stood through the ceiling's piece along that stretch, an intersecting
+/// pair that ugisect had not seen before the cut. ugcopl now cuts such a
+/// pair as ugisect does.
+#[test]
+fn a_pair_the_cuts_make_intersect_is_cut() {
+    let src = std::fs::read_to_string(fixture("copl/wall-through-a-ceiling-cut-below-its-top.ug"))
+        .unwrap();
+    let eps = "1.093544e-5";
+    let check_eps = |text: &str| -> serde_json::Value {
+        serde_json::from_str(&run_ok(
+            "ugcheck",
+            &["-e", eps, "--json"],
+            Some(text.as_bytes()),
+        ))
+        .unwrap()
+    };
+    let before = check_eps(&src);
+    assert_eq!(count(&before, "intersecting"), 0, "{before}");
+    assert_eq!(count(&before, "overlapping"), 1, "{before}");
+    let out = run_ok("ugcopl", &["-e", eps], Some(src.as_bytes()));
+    let after = check_eps(&out);
+    for key in [
+        "intersecting",
+        "overlapping",
+        "tvertices",
+        "nonplanar",
+        "degenerate",
+    ] {
+        assert_eq!(count(&after, key), 0, "{key}: {out}");
+    }
+    // Area kept up to what snapping at epsilon moves: epsilon times the
+    // boundary's length (under a metre for each material here).
+    for ((m0, a0), (m1, a1)) in areas(&before).iter().zip(&areas(&after)) {
+        assert_eq!(m0, m1);
+        assert!((a0 - a1).abs() <= 1.093544e-5, "{m0}: {a0} → {a1}");
+    }
+    // The wall's piece above the ceiling's plane is a face of its own.
+    assert!(out.contains("f wing2.5.t1.i8.i"), "{out}");
+}

@@ -237,3 +237,38 @@ fn random_crossing_quads() {
         assert_cut(&format!("random case {case}"), &src);
     }
 }
+
+/// A `ugcopl origin` annotation (read by ugclean from the comment just
+/// before a face) goes before every piece of the face it names when
+/// ugisect cuts that face, and stays before a face it does not cut.
+#[test]
+fn origin_annotations_go_before_every_piece() {
+    let src = "c_rgb a 1 0 0;\nc_rgb b 0 1 0;\n\
+        v p1 0 0 0; v p2 4 0 0; v p3 4 4 0; v p4 0 4 0;\n\
+        v q1 2 2 -1; v q2 2 2 1; v q3 2 -2 1; v q4 2 -2 -1;\n\
+        v r1 10 0 0; v r2 11 0 0; v r3 11 1 0;\n\
+        {ugcopl origin floor area 16}\nf floor.c1 (p1 p2 p3 p4) a;\n\
+        f wall (q1 q2 q3 q4) b;\n\
+        {ugcopl origin tile area 2}\nf tile.c1 (r1 r2 r3) a;\n";
+    let out = run_ok("ugisect", &[], Some(src.as_bytes()));
+    let lines: Vec<&str> = out.lines().collect();
+    let faces: Vec<usize> = (0..lines.len())
+        .filter(|&k| lines[k].starts_with("f "))
+        .collect();
+    let floor: Vec<usize> = faces
+        .iter()
+        .copied()
+        .filter(|&k| lines[k].starts_with("f floor.c1."))
+        .collect();
+    assert_eq!(floor.len(), 2, "{out}");
+    for k in floor {
+        assert_eq!(lines[k - 1], "{ugcopl origin floor area 16}", "{out}");
+    }
+    let tile = faces
+        .iter()
+        .copied()
+        .find(|&k| lines[k].starts_with("f tile.c1 "))
+        .unwrap();
+    assert_eq!(lines[tile - 1], "{ugcopl origin tile area 2}", "{out}");
+    assert_eq!(out.matches("ugcopl origin").count(), 3, "{out}");
+}

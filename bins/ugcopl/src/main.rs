@@ -46,8 +46,8 @@ fn main() -> std::process::ExitCode {
         let contact = args.contact;
         let (out, st) = clean::copl::copl_contact(&model, eps, contact)?;
         c.verbose(format!(
-            "epsilon {eps:e}; contact ratio {contact}; {} overlapping pairs; {} contact pairs; {} faces cut into {} pieces; {} new vertices; {} T-vertices inserted; {} faces bent off their plane by welding, folded into triangles; {} round(s)",
-            st.pairs, st.contacts, st.faces_cut, st.pieces, st.new_vertices, st.tvertices, st.folded, st.rounds
+            "epsilon {eps:e}; contact ratio {contact}; {} overlapping pairs; {} contact pairs; {} faces cut into {} pieces; {} new vertices; {} T-vertices inserted; {} faces bent off their plane by welding, folded into triangles; {} round(s); {} pairs the cuts made intersect, cut",
+            st.pairs, st.contacts, st.faces_cut, st.pieces, st.new_vertices, st.tvertices, st.folded, st.rounds, st.recut_pairs
         ));
         Ok(out)
     })

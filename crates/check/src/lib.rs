@@ -829,11 +829,22 @@ enum Want {
 /// The intersecting pairs only (what `ugisect` cuts): coplanar pairs are
 /// not measured.
 pub fn intersecting_pairs(geoms: &[Option<FaceGeom>], eps: f64) -> Vec<(usize, usize)> {
+    intersecting_pairs_with(geoms, eps, None)
+}
+
+/// [`intersecting_pairs`], and with `among` (per face) only the pairs with
+/// at least one face marked. The same pairs, in the same order, as
+/// [`intersecting_pairs`] filtered.
+pub fn intersecting_pairs_with(
+    geoms: &[Option<FaceGeom>],
+    eps: f64,
+    among: Option<&[bool]>,
+) -> Vec<(usize, usize)> {
     classify(
         geoms,
         eps,
         Want::Intersecting,
-        None,
+        among,
         geom::intersect::COPLANAR_EPSILONS,
     )
     .into_iter()

@@ -67,6 +67,9 @@ pub struct Stats {
     pub folded: usize,
     /// Rounds of cutting (pairs looked for again after each).
     pub rounds: usize,
+    /// Pairs that the cuts in the plane made intersect, cut as `ugisect`
+    /// cuts them.
+    pub recut_pairs: usize,
 }
 
 /// The default contact ratio: a parallel face in front of another is a
@@ -330,7 +333,55 @@ pub fn copl_contact(m: &Model, eps: f64, contact: f64) -> Result<(Model, Stats),
         out = next;
     }
     stats.rounds = rounds;
+    if stats.pairs + stats.contacts > 0 {
+        out = recut(m, out, eps, &mut stats)?;
+    }
     Ok((out, stats))
+}
+
+/// Where `copl_contact`'s cuts made a face cross another that is not
+/// coplanar with it, that pair is cut as `ugisect` cuts it (only pairs
+/// with a face that is not in `m` as it is are looked at), and what that
+/// cut leaves overlapping is cut in the plane again (one round each).
+/// A piece's corner taken from a coplanar neighbour up to 3 epsilon off
+/// its plane is a fresh point in the piece's plane, so the piece's edge
+/// can run up to 3 epsilon from where the neighbour's edge, and the edge
+/// of a face standing on it, run: a wing's ceiling cut under the top of a
+/// wall got a corner 1.5 epsilon below the wall's top corner, and the wall
+/// then stood 1.5 epsilon through the ceiling along that stretch, an
+/// intersecting pair that `ugisect` had not seen before the cut
+/// (dirty-building seed 1042, a triangle export with a wing).
+fn recut(m: &Model, out: Model, eps: f64, stats: &mut Stats) -> Result<Model, ug::Diagnostic> {
+    let changed = |before: &Model, now: &Model| -> Vec<bool> {
+        let was: rustc_hash::FxHashSet<u64> = face_keys(before).into_iter().flatten().collect();
+        face_keys(now)
+            .into_iter()
+            .map(|k| k.is_none_or(|k| !was.contains(&k)))
+            .collect()
+    };
+    let among = changed(m, &out);
+    let (cut, st) = crate::isect::isect_once(&out, eps, Some(&among))?;
+    if st.pairs == 0 {
+        return Ok(out);
+    }
+    stats.recut_pairs = st.pairs;
+    stats.faces_cut += st.faces_cut;
+    stats.pieces += st.pieces;
+    stats.new_vertices += st.new_vertices;
+    stats.tvertices += st.tvertices;
+    stats.folded += st.folded;
+    let among = changed(&out, &cut);
+    let (next, st) = copl_once(&cut, eps, 0.0, Some(&among))?;
+    if st.pairs == 0 {
+        return Ok(cut);
+    }
+    stats.rounds += 1;
+    stats.faces_cut += st.faces_cut;
+    stats.pieces += st.pieces;
+    stats.new_vertices += st.new_vertices;
+    stats.tvertices += st.tvertices;
+    stats.folded += st.folded;
+    Ok(next)
 }
 
 /// Most rounds of [`copl_contact`].

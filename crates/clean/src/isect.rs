@@ -68,11 +68,11 @@ const MAX_ROUNDS: usize = 4;
 pub fn isect(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
     let (planar, pst) = crate::planar::planarize(m, eps);
     let m = &planar;
-    let (mut out, mut stats) = isect_once(m, eps)?;
+    let (mut out, mut stats) = isect_once(m, eps, None)?;
     stats.tessellated = pst.nonplanar;
     let mut rounds = 1;
     while stats.pairs > 0 && rounds < MAX_ROUNDS {
-        let (next, st) = isect_once(&out, eps)?;
+        let (next, st) = isect_once(&out, eps, None)?;
         if st.pairs == 0 || (st.faces_cut == 0 && st.new_vertices == 0) {
             break;
         }
@@ -91,10 +91,21 @@ pub fn isect(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
     Ok((out, stats))
 }
 
-/// One round: every intersecting pair found and cut.
-fn isect_once(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
+/// One round: every intersecting pair found and cut; with `among` (by
+/// `FaceId` index), only the pairs with a face marked.
+pub(crate) fn isect_once(
+    m: &Model,
+    eps: f64,
+    among: Option<&[bool]>,
+) -> Result<(Model, Stats), ug::Diagnostic> {
     let (faces, geoms) = face_geoms(m);
-    let pairs: Vec<(usize, usize)> = check::intersecting_pairs(&geoms, eps);
+    let among: Option<Vec<bool>> = among.map(|a| {
+        faces
+            .iter()
+            .map(|f| a.get(f.idx()).copied().unwrap_or(true))
+            .collect()
+    });
+    let pairs: Vec<(usize, usize)> = check::intersecting_pairs_with(&geoms, eps, among.as_deref());
     let mut stats = Stats {
         pairs: pairs.len(),
         ..Stats::default()
@@ -161,29 +172,49 @@ fn isect_once(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
     for (k, &f) in faces.iter().enumerate() {
         order[f.idx()] = k;
     }
+    // A `ugcopl origin` annotation (`ugclean` reads it from the comment
+    // just before a face) goes before every piece of the face it names.
+    let mut origin: Option<&str> = None;
     for it in &m.items {
         let Item::Face(f) = it else {
-            rb.pass(it);
+            if let Some(o) = origin.take() {
+                rb.pass(&Item::Comment(o.to_string()));
+            }
+            match it {
+                Item::Comment(c) if c.trim_start().starts_with("ugcopl origin") => {
+                    origin = Some(c);
+                }
+                _ => rb.pass(it),
+            }
             continue;
         };
         let k = order[f.idx()];
         let face = &m.faces[f.idx()];
-        let Some(r) = cut_of.get(k).copied().flatten() else {
+        let whole = |rb: &mut Rebuild, origin: Option<&str>| {
+            if let Some(o) = origin {
+                rb.pass(&Item::Comment(o.to_string()));
+            }
             rb.face(face.clone());
+        };
+        let Some(r) = cut_of.get(k).copied().flatten() else {
+            whole(&mut rb, origin.take());
             continue;
         };
         let (_, pieces, ext) = &results[r];
         stats.extensions += ext;
         if pieces.is_empty() {
             // Nothing with area (cannot happen for a sound face): keep it.
-            rb.face(face.clone());
+            whole(&mut rb, origin.take());
             continue;
         }
         if pieces.len() > 1 {
             stats.faces_cut += 1;
         }
         let base = face.name.clone().unwrap_or_else(|| format!("f{}", k + 1));
-        stats.pieces += rb.pieces(face, &base, "i", pieces, None);
+        stats.pieces += rb.pieces(face, &base, "i", pieces, origin.take());
+    }
+    if let Some(o) = origin {
+        rb.pass(&Item::Comment(o.to_string()));
     }
     stats.new_vertices = rb.new_vertices;
     let opts = crate::group::Options {
