@@ -65,8 +65,9 @@ fn config(seed: u64) -> Cad {
 /// Seeds that once failed, drawn as they were then (without the stairs
 /// and ramps added since): [`dirty_buildings_regression_seeds`] and the
 /// placed 1326. [`FOUND_WITH_STAIRS`] failed with stairs and ramps.
-const AS_FOUND: [u64; 15] = [
-    228, 326, 367, 556, 573, 1326, 1693, 5731, 10015, 10354, 11293, 11335, 11822, 11847, 11884,
+const AS_FOUND: [u64; 16] = [
+    228, 326, 367, 556, 573, 1042, 1326, 1693, 5731, 10015, 10354, 11293, 11335, 11822, 11847,
+    11884,
 ];
 
 /// Seeds that once failed with stairs and ramps (found over 2000..2800):
@@ -78,7 +79,23 @@ const AS_FOUND: [u64; 15] = [
 /// pair while the line through them needed 4 epsilon).
 const FOUND_WITH_STAIRS: [u64; 3] = [2012, 2615, 2664];
 
+/// Seeds that once failed on a building of 3 × 2 rooms on 2 storeys with
+/// stairs and ramps (`UG_CAD=3,2,2` over 8600..8700), drawn so here:
+/// 8666, a ramp at 6.4° sharing a zigzag edge with tiles, one joint's
+/// foot on the planes' line inside the ramp (an intersecting pair that
+/// ugisect did not cut); 8628, a T-vertex after ugcopl on the base of a
+/// wall's sliver 1.8 epsilon wide, which the welder took as without area.
+const FOUND_LARGER: [u64; 2] = [8628, 8666];
+
 fn size(seed: u64) -> Cad {
+    if FOUND_LARGER.contains(&seed) {
+        return Cad {
+            rooms_x: 3,
+            rooms_y: 2,
+            storeys: 2,
+            ..Cad::default()
+        };
+    }
     if let Ok(v) = std::env::var("UG_CAD") {
         let n: Vec<usize> = v
             .split(',')
@@ -335,12 +352,18 @@ fn dirty_buildings_seeds_150_to_199() {
 /// * 1693 (found over 200..2000): a desk bottom's piece non-planar by 1.3
 ///   epsilon after ugclean's coincident step, which gave it three of its
 ///   twin's corners once two others were vetoed
-///   (fixtures/clean/vetoed-corners-bend-a-desk-bottom.ug).
+///   (fixtures/clean/vetoed-corners-bend-a-desk-bottom.ug);
+/// * 1042 (found over 200..1200): two intersecting pairs after ugcopl, a
+///   wing's wall standing 1.5 epsilon through a ceiling piece that ugcopl
+///   cut with a corner in its own plane below the wall's top corner
+///   (fixtures/copl/wall-through-a-ceiling-cut-below-its-top.ug; ugcopl
+///   now cuts the pairs its cuts make intersect).
 #[test]
 fn dirty_buildings_regression_seeds() {
     run(AS_FOUND
         .iter()
         .chain(&FOUND_WITH_STAIRS)
+        .chain(&FOUND_LARGER)
         .copied()
         .filter(|&s| s != 1326)
         .collect());

@@ -1050,6 +1050,32 @@ mod tests {
         assert!(m.edge_between(VertexId(0), VertexId(2)).is_none());
     }
 
+    /// A sliver 1.8 epsilon wide is a face to `ugcheck` (wider than
+    /// epsilon), so a vertex on its edge is a T-vertex to insert, though
+    /// its area is under epsilon times its size (dirty-building seed 8628
+    /// with stairs: a wall's side under a ramp's corner 1.8 epsilon above
+    /// the wall's bottom, whose piece had the corner's projection).
+    #[test]
+    fn a_vertex_on_a_sliver_wider_than_epsilon_is_inserted() {
+        let mut m = mesh(
+            "v a 0 0 0; v b 10 0 0; v top 5 0.018 0;\
+             v m 5 0 0; v c 10 -1 0; v d 0 -1 0;\
+             f sliver (a b top); f low (d c b m a);",
+        );
+        let s = split_edges(&mut m, 0.01);
+        m.validate().unwrap();
+        assert_eq!((s.inserted, s.edges), (1, 1), "{s:?}");
+        assert_eq!(face_lines(&m)[0], "f sliver (a m b top);");
+        // One epsilon wide, it is degenerate: nothing goes into it.
+        let mut m = mesh(
+            "v a 0 0 0; v b 10 0 0; v top 5 0.0099 0;\
+             v m 5 0 0; v c 10 -1 0; v d 0 -1 0;\
+             f sliver (a b top); f low (d c b m a);",
+        );
+        let s = split_edges(&mut m, 0.01);
+        assert_eq!(s.inserted, 0, "{s:?}");
+    }
+
     #[test]
     fn several_t_vertices_along_one_edge_go_in_order_in_every_face() {
         let mut m = mesh(

@@ -27,13 +27,25 @@ const MAX_SPLIT_PASSES: usize = 16;
 /// longer than `eps`, or an outer contour whose area is at most `eps` times
 /// the face's size. `None` for a sound face.
 pub fn degeneracy(mesh: &Mesh, f: FaceId, eps: f64) -> Option<&'static str> {
-    degeneracy_within(mesh, f, eps, false)
+    degeneracy_within(mesh, f, eps, NoArea::Sliver)
 }
 
-/// [`degeneracy`], with "no area" meaning at most ε² (`ugcheck`'s own
-/// limit for a face's area) when `strict`, instead of `eps` times the
-/// face's size (which also takes a sliver up to about 2 epsilon wide).
-fn degeneracy_within(mesh: &Mesh, f: FaceId, eps: f64, strict: bool) -> Option<&'static str> {
+/// What "no area" means to [`degeneracy_within`].
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum NoArea {
+    /// At most `eps` times the face's size (its bounding box's diagonal):
+    /// also a sliver up to about 2 epsilon wide.
+    Sliver,
+    /// At most half that: a sliver up to about epsilon wide, as narrow as
+    /// `ugcheck` takes a face to be degenerate (a triangle whose corner
+    /// lies within epsilon of the opposite edge).
+    Narrow,
+    /// At most ε², `ugcheck`'s own limit for a face's area.
+    Strict,
+}
+
+/// [`degeneracy`], with "no area" as `no_area` says.
+fn degeneracy_within(mesh: &Mesh, f: FaceId, eps: f64, no_area: NoArea) -> Option<&'static str> {
     let pts = mesh.face_points(f);
     if pts.is_empty() {
         return Some("no contour");
@@ -48,7 +60,11 @@ fn degeneracy_within(mesh: &Mesh, f: FaceId, eps: f64, strict: bool) -> Option<&
     let size = (hi - lo).length();
     let area = newell_normal(&pts[0]).length() / 2.0;
     // NaN counts as no area.
-    let limit = if strict { eps * eps } else { eps * size };
+    let limit = match no_area {
+        NoArea::Sliver => eps * size,
+        NoArea::Narrow => 0.5 * eps * size,
+        NoArea::Strict => eps * eps,
+    };
     let none = |a: f64| a.partial_cmp(&limit) != Some(std::cmp::Ordering::Greater);
     // A contour whose lobes cancel (a bow-tie: a quad with two corners
     // swapped) has no Newell area but spans a plane: it is not degenerate
@@ -238,7 +254,16 @@ fn apply_merges(
     // made, dropped here, left its neighbours' edges unmatched).
     for &f in &faces {
         if mesh.is_face_live(f)
-            && let Some(reason) = degeneracy_within(mesh, f, eps, !touched[f.idx()])
+            && let Some(reason) = degeneracy_within(
+                mesh,
+                f,
+                eps,
+                if touched[f.idx()] {
+                    NoArea::Sliver
+                } else {
+                    NoArea::Strict
+                },
+            )
         {
             mesh.remove_face(f);
             dropped.push((f, reason.to_string()));
@@ -416,7 +441,11 @@ fn vertices_on_edge(mesh: &Mesh, index: &Points, e: EdgeId, eps: f64) -> Vec<Ver
     on.into_iter().map(|(_, v)| v).collect()
 }
 
-/// Step 2: inserts every vertex of a sound face (see [`degeneracy`]) that
+/// Step 2: inserts every vertex of a sound face (no edge of `eps` or
+/// less, and wider than about `eps`: `ugcheck`'s measure, so that no face
+/// it checks keeps a T-vertex; a sliver 1.8 epsilon wide, which
+/// [`degeneracy`] takes as without area, kept one in dirty-building seed
+/// 8628 with stairs) that
 /// lies within `eps` of the interior of an edge of a sound face into that
 /// edge, in every face that uses the edge, several along one edge in order.
 /// Each face is rewritten once per pass; later passes check only the edges
@@ -426,7 +455,7 @@ pub fn split_edges(mesh: &mut Mesh, eps: f64) -> Split {
     let faces: Vec<FaceId> = mesh.faces().collect();
     let mut sound = vec![false; mesh.model().faces.len()];
     for &f in &faces {
-        sound[f.idx()] = degeneracy(mesh, f, eps).is_none();
+        sound[f.idx()] = degeneracy_within(mesh, f, eps, NoArea::Narrow).is_none();
     }
     let mut verts: Vec<VertexId> = faces
         .iter()
