@@ -15,8 +15,10 @@ Examples:
 /// belongs to; ugclean then drops the hidden copy. Pieces keep their face's
 /// material and orientation, are named NAME.c1, NAME.c2, ..., and carry the
 /// annotation {ugcopl origin NAME area A} that ugclean reads. Points where
-/// cuts meet neighbouring edges are inserted there (no T-vertex). Instances
-/// are flattened first.
+/// cuts meet neighbouring edges are inserted there (no T-vertex); a pair
+/// that the cuts make intersect (a piece's corner lies in its own plane, up
+/// to 3 epsilon from the vertex it stands for) is cut as ugisect cuts it.
+/// Instances are flattened first.
 ///
 /// Contact cuts: a face is also cut along the outline of a parallel face
 /// lying a small gap in front of it (a lamp a hair below the ceiling, a
