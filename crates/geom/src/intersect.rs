@@ -228,13 +228,18 @@ pub fn relate(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Relation {
         } => (p0, dir, ts, near),
     };
     // Each boundary point, and the middle of each stretch of the line
-    // between them, as `cut_segments` tries it. Where the line runs
-    // through vertices on both planes (a shallow angle), a vertex within
-    // epsilon of the other plane is tried where it is, not at its foot on
-    // the line, which may lie epsilon / sin θ away (a ramp at 6.4°
-    // sharing a zigzag edge with tiles, whose joint's vertex was 1.05
-    // epsilon from the line and its foot inside the ramp: property seed
-    // 8666 with stairs).
+    // between them, as `cut_segments` tries it. A vertex within epsilon
+    // of the other plane is tried where it is, not at its foot on the
+    // line: at a shallow angle the foot may lie epsilon / sin θ away (a
+    // ramp at 6.4° sharing a zigzag edge with tiles, whose joint's vertex
+    // was 1.05 epsilon from the line and its foot inside the ramp:
+    // property seed 8666 with stairs); at a steep one, a hair away, which
+    // decides when the vertex lies about epsilon from the other face's
+    // edge (a ramp's corner 1.0001 epsilon from a floor's edge, its foot
+    // a hair more than epsilon inside the floor, a pair that no cut could
+    // resolve: ugisect's snap rounding measures the corner itself). Only
+    // where the line is the planes' line at a shallow angle (vertices on
+    // both planes spanning an area: a rug on a tile) the foot is tried.
     let mut samples = Vec::with_capacity(ts.len() * 2);
     for (k, &t) in ts.iter().enumerate() {
         samples.push(near[k]);
@@ -276,9 +281,10 @@ enum LineCase {
         dir: DVec3,
         ts: Vec<f64>,
         at: Vec<DVec3>,
-        /// Where `relate` tries each boundary point: the vertex itself
-        /// when the line was taken through vertices on both planes (a
-        /// shallow angle), else as `at`.
+        /// Where `relate` tries each boundary point: a vertex on the
+        /// other plane itself, except at a shallow angle where the line
+        /// is the planes' line (there its foot, as `at`); a crossing as
+        /// `at`.
         near: Vec<DVec3>,
     },
 }
@@ -389,7 +395,8 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
     // side: cut along the side's edge instead, the end's piece still
     // crossed it; dirty-building seeds 10015, 10354, 11293, 11335, 11822).
     let mut anchored = false;
-    if uu < 1.0 / 16.0 {
+    let steep = uu >= 1.0 / 16.0;
+    if !steep {
         let mut on_both: Vec<(f64, DVec3)> = Vec::new();
         for (g, other, edges) in [(a, b, &ea), (b, a, &eb)] {
             for &(ci, i) in edges.iter() {
@@ -455,7 +462,7 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
                 // only an epsilon off the plane).
                 let t = (p - p0).dot(dir);
                 let foot = p0 + dir * t;
-                ev.push((t, foot, if anchored { p } else { foot }));
+                ev.push((t, foot, if anchored || steep { p } else { foot }));
             } else if dp * dq < 0.0 {
                 let (p, q, dp, dq) = if p.to_array() <= q.to_array() {
                     (p, q, dp, dq)
@@ -814,5 +821,47 @@ mod tests {
         assert_eq!(relate(&tile, &ramp, eps), Relation::Touch);
         assert_eq!(relate(&ramp, &tile, eps), Relation::Touch);
         assert!(cut_segments(&tile, &ramp, eps).is_empty());
+    }
+
+    /// A ramp's side (steep, 90°) and the floor piece it stands through
+    /// share an edge; the ramp's corner at the end of it lies 1.0001
+    /// epsilon from the floor's edge in the floor's plane, but its foot on
+    /// the planes' line lies a hair more than epsilon inside the floor
+    /// (the 100,000-face CAD building with stairs: an intersecting pair
+    /// that ugisect's snap rounding, which measures the corner itself,
+    /// could not cut). A vertex on the other plane is tried where it is.
+    #[test]
+    fn a_corner_on_the_other_plane_is_tried_where_it_is() {
+        let p = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+        let floor = FaceGeom::new(vec![vec![
+            p(72.95385610684355, 9.356581197876707, 5.9999993960673095),
+            p(72.95384288116097, 7.576948102062931, 5.999994541242828),
+            p(73.08384772393735, 7.576937151346673, 6.000001778430269),
+            p(73.08385002299785, 7.621848696019912, 5.999999271086049),
+            p(73.10356257356385, 7.6218487800704615, 6.000003445725445),
+            p(73.1035619321696, 7.79885623573579, 5.999999284801479),
+            p(73.10356569901141, 9.072299689024376, 6.0000065173394495),
+            p(73.10384142521168, 9.072346334613076, 6.000007808536367),
+            p(73.1038524415452, 9.356599024469334, 5.999999400585212),
+        ]])
+        .unwrap();
+        let ramp = FaceGeom::new(vec![vec![
+            p(73.1035654811911, 9.269953766892776, 5.9871895511976145),
+            p(73.10357683943732, 5.549952478647611, 5.9872061995327135),
+            p(73.10357686079888, 5.549952015804269, 5.999999117732252),
+            p(73.10356775840829, 6.006900427082299, 5.999990141357699),
+            p(73.10356780454903, 6.028455444561275, 6.000000198132573),
+            p(73.10356063446102, 6.7218509056726425, 6.000003378852994),
+            p(73.10356942838851, 6.721850912999633, 5.995614923007768),
+            p(73.1035713679374, 7.621848777250633, 5.9955958330242565),
+            p(73.10356257356385, 7.6218487800704615, 6.000003445725445),
+            p(73.1035619321696, 7.79885623573579, 5.999999284801479),
+            p(73.10356569901141, 9.072299689024376, 6.0000065173394495),
+            p(73.10356569889011, 9.072409764284313, 5.99999937946051),
+        ]])
+        .unwrap();
+        let eps = 1.08547e-4;
+        assert_eq!(relate(&floor, &ramp, eps), Relation::Touch);
+        assert_eq!(relate(&ramp, &floor, eps), Relation::Touch);
     }
 }
