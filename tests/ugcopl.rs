@@ -8,6 +8,16 @@ fn check(text: &str) -> serde_json::Value {
     serde_json::from_str(&run_ok("ugcheck", &["--json"], Some(text.as_bytes()))).unwrap()
 }
 
+/// ugcheck's report with the epsilon `eps`.
+fn check_with(text: &str, eps: &str) -> serde_json::Value {
+    serde_json::from_str(&run_ok(
+        "ugcheck",
+        &["-e", eps, "--json"],
+        Some(text.as_bytes()),
+    ))
+    .unwrap()
+}
+
 fn count(r: &serde_json::Value, key: &str) -> usize {
     r[key].as_array().unwrap().len()
 }
@@ -318,14 +328,7 @@ fn pairs_among_marked_faces_are_the_full_search_filtered() {
 #[test]
 fn a_face_two_epsilon_in_front_of_another_is_resolved_for_every_cut() {
     let eps = "8.630463e-6";
-    let check_eps = |text: &str| -> serde_json::Value {
-        serde_json::from_str(&run_ok(
-            "ugcheck",
-            &["-e", eps, "--json"],
-            Some(text.as_bytes()),
-        ))
-        .unwrap()
-    };
+    let check_eps = |text: &str| check_with(text, eps);
     let input = std::fs::read(fixture("copl/wall-end-past-slab.ug")).unwrap();
     let copl = run_ok("ugcopl", &["-e", eps], Some(&input));
     let clean = run_ok("ugclean", &["-e", eps], Some(copl.as_bytes()));
@@ -349,10 +352,7 @@ fn a_sliver_piece_wider_than_epsilon_is_kept() {
     let src =
         std::fs::read_to_string(fixture("copl/sliver-piece-beside-a-coincident-face.ug")).unwrap();
     let eps = ["-e", "1.299893e-5"];
-    let check_eps = |text: &str| -> serde_json::Value {
-        let args: Vec<&str> = ["--json"].iter().chain(&eps).copied().collect();
-        serde_json::from_str(&run_ok("ugcheck", &args, Some(text.as_bytes()))).unwrap()
-    };
+    let check_eps = |text: &str| check_with(text, eps[1]);
     let out = run_ok("ugcopl", &eps, Some(src.as_bytes()));
     assert!(
         out.contains(
@@ -382,14 +382,7 @@ fn a_pair_the_cuts_make_intersect_is_cut() {
     let src = std::fs::read_to_string(fixture("copl/wall-through-a-ceiling-cut-below-its-top.ug"))
         .unwrap();
     let eps = "1.093544e-5";
-    let check_eps = |text: &str| -> serde_json::Value {
-        serde_json::from_str(&run_ok(
-            "ugcheck",
-            &["-e", eps, "--json"],
-            Some(text.as_bytes()),
-        ))
-        .unwrap()
-    };
+    let check_eps = |text: &str| check_with(text, eps);
     let before = check_eps(&src);
     assert_eq!(count(&before, "intersecting"), 0, "{before}");
     assert_eq!(count(&before, "overlapping"), 1, "{before}");
