@@ -519,3 +519,32 @@ fn refinement_points_within_epsilon_of_another_are_dropped() {
         1e-9,
     );
 }
+
+/// A face whose hole walks an edge of its outer contour backwards
+/// (fixtures/cut/hole-along-the-outer-contour.ug, from the 100,000-face
+/// building with stairs): ugcheck calls it degenerate (its boundary
+/// touches itself), and ugcut repairs it into the outer contour with a
+/// notch instead of covering part of the hole (an overlapping pair with
+/// the face that fills the hole).
+#[test]
+fn a_hole_along_the_outer_contour_is_not_covered() {
+    let src = std::fs::read(fixture("cut/hole-along-the-outer-contour.ug")).unwrap();
+    let eps = "1.08547e-4";
+    let before = check_eps(&src, eps);
+    let degenerate = before["degenerate"].as_array().unwrap();
+    assert_eq!(degenerate.len(), 1, "{degenerate:?}");
+    assert!(
+        degenerate[0]["reason"]
+            .as_str()
+            .unwrap()
+            .contains("walk edge"),
+        "{degenerate:?}"
+    );
+    for len in ["2", "0.5", "0.2"] {
+        let out = run_ok("ugcut", &["-q", "-e", eps, "-l", len], Some(&src));
+        let r = check_eps(out.as_bytes(), eps);
+        for key in ["overlapping", "degenerate", "tvertices", "nonpatch"] {
+            assert_eq!(count(&r, key), 0, "-l {len}: {key}: {}", r[key]);
+        }
+    }
+}

@@ -57,11 +57,12 @@ fn main() -> std::process::ExitCode {
         let (out, tents) = clean::group::collapse_tents(out, eps);
         if c.verbose > 0 {
             eprintln!(
-                "epsilon {eps:e}; {} coincident pairs; removed {} faces, area {}; {} vertex records of kept faces replaced by the removed twins'",
+                "epsilon {eps:e}; {} coincident pairs; removed {} faces, area {}; {} vertex records of kept faces replaced by the removed twins'; {} edges that two contours of a face then walked both ways joined",
                 st.pairs,
                 st.removed.len(),
                 st.area_removed,
-                st.snapped
+                st.snapped,
+                st.joined
             );
             for (r, k, why) in &st.removed {
                 eprintln!("  removed {r} (kept {k}): {why}");

@@ -35,7 +35,8 @@
 
 use check::PairKind;
 use geom::DVec3;
-use ug::{FaceId, Item, Model};
+use rustc_hash::FxHashMap;
+use ug::{FaceId, Item, Model, VertexId};
 use winged::Mesh;
 
 /// What was removed and why.
@@ -47,6 +48,9 @@ pub struct Stats {
     pub area_removed: f64,
     /// Vertex records of kept faces replaced by the removed face's.
     pub snapped: usize,
+    /// Edges that two contours of a face came to walk both ways, removed
+    /// (see [`join_contours_along_shared_edges`]).
+    pub joined: usize,
 }
 
 fn label(m: &Model, k: usize, f: FaceId) -> String {
@@ -155,7 +159,56 @@ pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
         stats.area_removed += st.area_removed;
         stats.snapped += st.snapped;
     }
+    if stats.snapped > 0 {
+        stats.joined = join_contours_along_shared_edges(&mut out);
+    }
     (out, stats)
+}
+
+/// Where two contours of a face walk one edge in opposite directions (a
+/// hole whose corners took the records of the outer contour's: the
+/// 100,000-face CAD building with stairs, where the mesher then covered
+/// part of the hole), the two become one contour without that edge: the
+/// outer contour with a notch, or two holes as one. Returns the number of
+/// edges so removed.
+pub fn join_contours_along_shared_edges(m: &mut Model) -> usize {
+    let mut joined = 0;
+    let faces: Vec<FaceId> = m.top_faces().collect();
+    for f in faces {
+        // At most as many joins as the face has contours, less one.
+        for _ in 1..m.faces[f.idx()].contours.len() {
+            let cs = &m.faces[f.idx()].contours;
+            let mut at: FxHashMap<(VertexId, VertexId), (usize, usize)> = FxHashMap::default();
+            for (ci, c) in cs.iter().enumerate() {
+                for i in 0..c.len() {
+                    at.entry((c[i], c[(i + 1) % c.len()])).or_insert((ci, i));
+                }
+            }
+            // The first edge (in contour order) walked back by a later contour.
+            let found = cs.iter().enumerate().find_map(|(ci, c)| {
+                (0..c.len()).find_map(|i| {
+                    let (a, b) = (c[i], c[(i + 1) % c.len()]);
+                    at.get(&(b, a))
+                        .filter(|&&(cj, _)| cj > ci)
+                        .map(|&(cj, j)| (ci, i, cj, j))
+                })
+            });
+            let Some((ci, i, cj, j)) = found else {
+                break;
+            };
+            // Contour ci from b round to a, then contour cj from after a
+            // round to before b.
+            let (c1, c2) = (&cs[ci], &cs[cj]);
+            let (n1, n2) = (c1.len(), c2.len());
+            let mut merged: Vec<VertexId> = (1..=n1).map(|k| c1[(i + k) % n1]).collect();
+            merged.extend((2..n2).map(|k| c2[(j + k) % n2]));
+            let face = &mut m.faces[f.idx()];
+            face.contours[ci] = merged;
+            face.contours.remove(cj);
+            joined += 1;
+        }
+    }
+    joined
 }
 
 /// One round of [`clean`]: the pairs coincident in `m`.
@@ -629,4 +682,29 @@ pub fn remove_faces(m: &Model, removed: &[bool]) -> Model {
         keep[k - 1]
     });
     out
+}
+
+#[cfg(test)]
+mod join_tests {
+    use super::*;
+
+    /// A square whose square hole lies along its bottom edge, walked the
+    /// other way: one contour with a notch, the same region.
+    #[test]
+    fn a_hole_along_the_outer_contour_becomes_a_notch() {
+        let src = "v a 0 0 0; v b 4 0 0; v c 4 4 0; v d 0 4 0;\
+                   v p 1 0 0; v q 3 0 0; v r 3 1 0; v s 1 1 0;\
+                   f x (a p q b c d) (q p s r);";
+        let mut m = ug::parse(src.as_bytes(), "t").unwrap().model;
+        assert_eq!(join_contours_along_shared_edges(&mut m), 1);
+        let f = m.top_faces().next().unwrap();
+        let names: Vec<&str> = m.faces[f.idx()].contours[0]
+            .iter()
+            .map(|&v| m.vertices[v.idx()].name.as_str())
+            .collect();
+        assert_eq!(m.faces[f.idx()].contours.len(), 1);
+        assert_eq!(names, ["q", "b", "c", "d", "a", "p", "s", "r"]);
+        // Nothing to join: unchanged.
+        assert_eq!(join_contours_along_shared_edges(&mut m), 0);
+    }
 }

@@ -424,6 +424,16 @@ pub fn sound(mesh: &Mesh, f: FaceId, frame: &Frame, eps: f64) -> bool {
             edges.push((a, b, frame.to_2d(mesh.pos(a)), frame.to_2d(mesh.pos(b))));
         }
     }
+    // An edge walked twice (a hole lying along the outer contour, which
+    // ugclean's sharing of a coincident pair's records can make: the
+    // mesher covered part of the hole) is not sound either: the repair's
+    // arrangement drops it and joins the two contours.
+    let mut pairs: Vec<(VertexId, VertexId)> =
+        edges.iter().map(|e| (e.0.min(e.1), e.0.max(e.1))).collect();
+    pairs.sort_unstable();
+    if pairs.windows(2).any(|w| w[0] == w[1]) {
+        return false;
+    }
     let index = (edges.len() > 24).then(|| {
         geom::BoxIndex::new(edges.iter().enumerate().map(|(k, e)| {
             (
