@@ -612,18 +612,11 @@ fn shape_defect(cx: &Ctx<'_>, face: &ug::Face, pts: &[Vec<DVec3>], eps: f64) -> 
     }
     // An edge walked twice: a hole lying along the outer contour (or two
     // holes along each other). The face's boundary touches itself there.
-    let mut pairs: Vec<(VertexId, VertexId)> = face
-        .contours
-        .iter()
-        .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
-        .map(|(a, b)| (a.min(b), a.max(b)))
-        .collect();
-    pairs.sort_unstable();
-    if let Some(w) = pairs.windows(2).find(|w| w[0] == w[1]) {
+    if let Some((a, b)) = winged::pieces::edge_walked_twice(&face.contours) {
         return Some(format!(
             "its contours walk edge {}-{} twice",
-            cx.vname(w[0].0),
-            cx.vname(w[0].1)
+            cx.vname(a),
+            cx.vname(b)
         ));
     }
     let g = FaceGeom::new(pts.to_vec())?;

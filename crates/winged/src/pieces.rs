@@ -397,10 +397,23 @@ pub fn replace(
     }
 }
 
+/// An edge (lower vertex id first) that a face's contours walk twice, in
+/// either direction: a hole lying along the outer contour, or two holes
+/// along each other. The face's boundary touches itself there.
+pub fn edge_walked_twice(contours: &[Vec<VertexId>]) -> Option<(VertexId, VertexId)> {
+    let mut pairs: Vec<(VertexId, VertexId)> = contours
+        .iter()
+        .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
+        .map(|(a, b)| (a.min(b), a.max(b)))
+        .collect();
+    pairs.sort_unstable();
+    pairs.windows(2).find(|w| w[0] == w[1]).map(|w| w[0])
+}
+
 /// Whether a face's contours are sound in `frame`: no vertex visited twice,
-/// no edge crossing another, no vertex within `eps` of an edge it is not an
-/// end of. Cheap for the small faces that are most of a model; faces with
-/// many vertices use an index of their edges.
+/// no edge walked twice, no edge crossing another, no vertex within `eps`
+/// of an edge it is not an end of. Cheap for the small faces that are most
+/// of a model; faces with many vertices use an index of their edges.
 pub fn sound(mesh: &Mesh, f: FaceId, frame: &Frame, eps: f64) -> bool {
     use geom::{SegmentContact, segments_2d};
     let face = mesh.face(f);
@@ -428,10 +441,7 @@ pub fn sound(mesh: &Mesh, f: FaceId, frame: &Frame, eps: f64) -> bool {
     // ugclean's sharing of a coincident pair's records can make: the
     // mesher covered part of the hole) is not sound either: the repair's
     // arrangement drops it and joins the two contours.
-    let mut pairs: Vec<(VertexId, VertexId)> =
-        edges.iter().map(|e| (e.0.min(e.1), e.0.max(e.1))).collect();
-    pairs.sort_unstable();
-    if pairs.windows(2).any(|w| w[0] == w[1]) {
+    if edge_walked_twice(&face.contours).is_some() {
         return false;
     }
     let index = (edges.len() > 24).then(|| {
