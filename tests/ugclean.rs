@@ -610,3 +610,38 @@ fn sharing_a_pairs_records_makes_no_t_vertex() {
     assert!(out.contains("f s0w1p0.0.i4 "), "{out}");
     assert!(!out.contains("f wing0.0.i2 "), "{out}");
 }
+
+/// Two coincident end pieces, the removed one naming a corner the kept one
+/// lacks (fixtures/clean/end-piece-missing-a-corner.ug, property seed 856:
+/// a wing wall's end 1.1 epsilon past the other's, and the facade sliver
+/// between them): the kept slab piece takes the removed facade piece's
+/// contour, keeping its own name and material, so the sliver meets it
+/// along the edge they share and no edge is walked twice the same way.
+/// Before, one inconsistently oriented edge after ugclean.
+#[test]
+fn the_kept_face_takes_a_twin_contour_that_names_more_corners() {
+    let (out, r) = coincident_step_checked(
+        "clean/end-piece-missing-a-corner.ug",
+        "1.292876457393198e-5",
+    );
+    assert!(
+        !out.contains("f wing2.3.i5 "),
+        "the facade's piece goes:\n{out}"
+    );
+    assert!(
+        out.contains(
+            "f wingslab1.3.i2 (wing1.v7 wing1.1.iv213 wing1.v5 wing1.2.iv220 wing1.2.iv219 wingslab1.v3) slab;"
+        ),
+        "{out}"
+    );
+    for key in [
+        "inconsistent",
+        "degenerate",
+        "nonplanar",
+        "tvertices",
+        "coincident",
+        "overlapping",
+    ] {
+        assert_eq!(r[key].as_array().unwrap().len(), 0, "{key}:\n{out}");
+    }
+}

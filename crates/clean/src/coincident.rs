@@ -31,6 +31,15 @@
 //! more than half an epsilon. A record is not moved where that would make
 //! a face name a vertex twice.
 //!
+//! Which face of a pair is kept decides its name and material, not its
+//! shape: where the removed face's contours name every record the kept
+//! face's do and more (a corner the kept piece lacks, 1.1 epsilon off its
+//! edge: a wing wall's end just past the other's, property seed 856), the
+//! kept face takes those contours. The two cover the same region, and the
+//! corner the kept face lacked is one its neighbours' edges end at: with
+//! the kept face's own contour the facade sliver beside it met no face
+//! along one edge and the kept face walking the same way along another.
+//!
 //! Vertices that only removed faces used are removed too.
 
 use check::PairKind;
@@ -51,6 +60,9 @@ pub struct Stats {
     /// Edges that two contours of a face came to walk both ways, removed
     /// (see [`join_contours_along_shared_edges`]).
     pub joined: usize,
+    /// Kept faces that took their removed twin's contours (which name
+    /// every corner theirs did, and more).
+    pub reshaped: usize,
 }
 
 fn label(m: &Model, k: usize, f: FaceId) -> String {
@@ -158,6 +170,7 @@ pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
         stats.removed.extend(st.removed);
         stats.area_removed += st.area_removed;
         stats.snapped += st.snapped;
+        stats.reshaped += st.reshaped;
     }
     if stats.snapped > 0 {
         stats.joined = join_contours_along_shared_edges(&mut out);
@@ -239,6 +252,7 @@ fn clean_once(m: &Model, eps: f64) -> (Model, Stats) {
     let surfaces = std::cell::OnceCell::new();
     let mut removed = vec![false; m.faces.len()];
     let mut kept_for: Vec<(FaceId, FaceId)> = Vec::new();
+    let mut shape_of: FxHashMap<FaceId, FaceId> = FxHashMap::default();
     for (i, j) in pairs {
         let (a, b) = (faces[i], faces[j]);
         if removed[a.idx()] || removed[b.idx()] {
@@ -264,6 +278,16 @@ fn clean_once(m: &Model, eps: f64) -> (Model, Stats) {
             }
         };
         let lf = faces[loser];
+        // The kept face takes the removed one's contours where they name
+        // every corner the kept face's do and more (see the module's notes).
+        let wf = faces[winner];
+        let (ls, ws) = (
+            shape_of.get(&lf).copied().unwrap_or(lf),
+            shape_of.get(&wf).copied().unwrap_or(wf),
+        );
+        if names_more_corners(&m.faces[ls.idx()].contours, &m.faces[ws.idx()].contours) {
+            shape_of.insert(wf, ls);
+        }
         removed[lf.idx()] = true;
         stats.area_removed += geom::face_area(&points(lf)).abs();
         stats
@@ -272,6 +296,12 @@ fn clean_once(m: &Model, eps: f64) -> (Model, Stats) {
         kept_for.push((lf, faces[winner]));
     }
     let mut out = m.clone();
+    for (&f, &from) in &shape_of {
+        if !removed[f.idx()] {
+            out.faces[f.idx()].contours = m.faces[from.idx()].contours.clone();
+            stats.reshaped += 1;
+        }
+    }
     let gone = snap_onto_removed(
         &mut out,
         &kept_for,
@@ -295,6 +325,21 @@ fn clean_once(m: &Model, eps: f64) -> (Model, Stats) {
         out = crate::group::settle_stated(out, eps);
     }
     (out, stats)
+}
+
+/// Whether contours `a` name every vertex record that contours `b` name,
+/// and more, with as many contours.
+fn names_more_corners(a: &[Vec<VertexId>], b: &[Vec<VertexId>]) -> bool {
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut sa: Vec<VertexId> = a.iter().flatten().copied().collect();
+    let mut sb: Vec<VertexId> = b.iter().flatten().copied().collect();
+    sa.sort_unstable();
+    sa.dedup();
+    sb.sort_unstable();
+    sb.dedup();
+    sa.len() > sb.len() && sb.iter().all(|v| sa.binary_search(v).is_ok())
 }
 
 /// One record for each corner of a coincident pair (see the module's
