@@ -65,9 +65,9 @@ fn config(seed: u64) -> Cad {
 /// Seeds that once failed, drawn as they were then (without the stairs
 /// and ramps added since): [`dirty_buildings_regression_seeds`] and the
 /// placed 1326. [`FOUND_WITH_STAIRS`] failed with stairs and ramps.
-const AS_FOUND: [u64; 17] = [
+const AS_FOUND: [u64; 18] = [
     228, 326, 367, 556, 573, 856, 1042, 1326, 1693, 5731, 10015, 10354, 11293, 11335, 11822, 11847,
-    11884,
+    11884, 13285,
 ];
 
 /// Seeds that once failed with stairs and ramps (found over 2000..2800):
@@ -77,7 +77,11 @@ const AS_FOUND: [u64; 17] = [
 /// the edge they share; 2664, a ramp meeting its landing at 4.2°, whose
 /// snapped shared vertices lie 5.7 epsilon off one line (an intersecting
 /// pair while the line through them needed 4 epsilon).
-const FOUND_WITH_STAIRS: [u64; 3] = [2012, 2615, 2664];
+/// 3327 (found over 3000..3800, a triangle export on 2 storeys): a
+/// ramp's needle piece 1.02 epsilon wide on a floor piece's reflex corner,
+/// whose patch edges passed within epsilon of the needle's far corner (2
+/// T-vertices after ugcut; fixtures/cut/ramp-needle-at-a-floor-corner.ug).
+const FOUND_WITH_STAIRS: [u64; 4] = [2012, 2615, 2664, 3327];
 
 /// Seeds that once failed on a building of 3 × 2 rooms on 2 storeys with
 /// stairs and ramps (`UG_CAD=3,2,2` over 8600..8700), drawn so here:
@@ -363,7 +367,10 @@ fn dirty_buildings_seeds_150_to_199() {
 ///   other's, whose end pieces were coincident and the one kept lacked a
 ///   corner the removed ones named
 ///   (fixtures/clean/end-piece-missing-a-corner.ug; the kept face now
-///   takes such a twin's contour).
+///   takes such a twin's contour);
+/// * 13285 (found over 13000..14000): 3 T-vertices after ugcut, fixed with
+///   3327 ([`FOUND_WITH_STAIRS`]: a vertex just beyond epsilon of a
+///   corner joins it).
 #[test]
 fn dirty_buildings_regression_seeds() {
     run(AS_FOUND

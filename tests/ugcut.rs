@@ -548,3 +548,41 @@ fn a_hole_along_the_outer_contour_is_not_covered() {
         }
     }
 }
+
+/// A ramp's needle piece 1.02 epsilon wide lying on a floor piece at the
+/// floor's reflex corner, its far corner 1.02 epsilon from the floor's
+/// (fixtures/cut/ramp-needle-at-a-floor-corner.ug, property seed 3327):
+/// the floor's patch edges leaving that corner passed within epsilon of
+/// the needle's corner, 2 to 6 T-vertices at these lengths before. Now
+/// the needle's corner joins the floor's, the needle falls to a segment
+/// and is left out, and the floor keeps its area.
+#[test]
+fn a_vertex_just_beyond_epsilon_of_a_corner_joins_it() {
+    let eps = "8.919405275541317e-6";
+    let input = std::fs::read(fixture("cut/ramp-needle-at-a-floor-corner.ug")).unwrap();
+    let before = check_eps(&input, eps);
+    let floor = |r: &serde_json::Value| {
+        r["area_by_material"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|m| m["material"] == "floor")
+            .map(|m| m["area"].as_f64().unwrap())
+            .unwrap()
+    };
+    for len in ["0.7", "0.3", "0.1"] {
+        let out = run("ugcut", &["-v", "-e", eps, "-l", len], Some(&input));
+        assert!(out.status.success());
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert!(err.contains("joined the ends of 1 short edges"), "{err}");
+        assert!(
+            err.contains("face s0r0_0ramp.2.t1.i6.c1: fewer than 3 distinct vertices"),
+            "{err}"
+        );
+        let r = check_eps(&out.stdout, eps);
+        assert_only_sound_patches(&r, len);
+        assert_eq!(count(&r, "intersecting"), 0, "-l {len}");
+        let (a, b) = (floor(&r), floor(&before));
+        assert!((a - b).abs() <= 1e-9 * b, "-l {len}: {a} vs {b}");
+    }
+}

@@ -36,6 +36,11 @@
 //!    pairs of triangles that form a well-shaped convex quadrilateral are
 //!    joined.
 //!
+//! Where no triangle wider than epsilon fits on a short boundary edge, or
+//! a patch edge leaving a corner passes within epsilon of another face's
+//! vertex just over epsilon from that corner, the vertices are joined and
+//! the model meshed again ([`cut`]).
+//!
 //! Patches keep the face's material and orientation and are named `NAME.1`,
 //! `NAME.2`, … (unnamed faces give unnamed patches). New vertices are named
 //! after their edge (`a:b.1`) or their face (`NAME.v1`), and written just
@@ -537,21 +542,118 @@ pub fn cut(m: &Model, opts: Options) -> Result<(Model, Stats), String> {
         worst_angle: 180.0,
         ..Stats::default()
     };
-    let prepared = prepare(m, opts.eps, &mut stats);
-    let (out, done, stuck) = mesh_all(&prepared, opts, stats.clone())?;
-    if stuck.is_empty() {
-        return Ok((out, done));
+    let mut model = prepare(m, opts.eps, &mut stats);
+    // Joins asked for make the model prepared and meshed again; each round
+    // can ask for more where the first ones moved vertices (three rounds
+    // at most).
+    for round in 0.. {
+        let (out, done, mut joins) = mesh_all(&model, opts, stats.clone())?;
+        // A boundary edge a little longer than epsilon that no triangle
+        // can take without being narrower than epsilon (its face is too
+        // narrow there for an apex far enough across): its ends are
+        // joined, as a weld would (CAD building 8600 seed 10, the user's
+        // pipeline: a column's strip 9.3 epsilon high whose foot has two
+        // vertices 1.0017 epsilon apart, cut points of the slab at the
+        // column's two faces).
+        // And a vertex of another face just over epsilon from a corner,
+        // which a patch edge leaving that corner passes within epsilon of
+        // (a T-vertex): it joins the corner (property seed 3327, a ramp's
+        // needle piece 1.02 epsilon wide at a floor piece's corner).
+        joins.extend(near_corner_joins(&model, &out, opts.eps));
+        joins.sort_unstable();
+        joins.dedup();
+        if joins.is_empty() || round == 3 {
+            return Ok((out, done));
+        }
+        model = prepare_joining(&model, opts.eps, &mut stats, &joins);
     }
-    // A boundary edge a little longer than epsilon that no triangle can
-    // take without being narrower than epsilon (its face is too narrow
-    // there for an apex far enough across): its ends are joined, as a
-    // weld would, and the model meshed again (CAD building 8600 seed 10,
-    // the user's pipeline: a column's strip 9.3 epsilon high whose foot
-    // has two vertices 1.0017 epsilon apart, cut points of the slab at
-    // the column's two faces).
-    let again = prepare_joining(&prepared, opts.eps, &mut stats, &stuck);
-    let (out, done, _) = mesh_all(&again, opts, stats)?;
-    Ok((out, done))
+    unreachable!()
+}
+
+/// The joins that remove T-vertices a patch edge of `out` makes where it
+/// leaves a corner: a vertex of `model` more than epsilon and at most 2
+/// epsilon from the corner (the weld left the two apart) that lies within
+/// epsilon of the edge's interior joins the corner. Such pairs are rare,
+/// so this looks only at the edges leaving a vertex that has one.
+fn near_corner_joins(model: &Model, out: &Model, eps: f64) -> Joins {
+    let used: Vec<VertexId> = {
+        let mut v: Vec<VertexId> = model
+            .faces
+            .iter()
+            .flat_map(|f| f.contours.iter().flatten().copied())
+            .collect();
+        v.sort_unstable();
+        v.dedup();
+        v
+    };
+    let cell = 2.0 * eps;
+    let key = |p: DVec3| {
+        let q = (p / cell).floor();
+        (q.x as i64, q.y as i64, q.z as i64)
+    };
+    // Cells of 2 epsilon, each a list through `next` (index into `used`).
+    const NONE: u32 = u32::MAX;
+    let mut head: FxHashMap<(i64, i64, i64), u32> = FxHashMap::default();
+    let mut next = vec![NONE; used.len()];
+    for (i, &v) in used.iter().enumerate() {
+        let h = head.entry(key(model.pos(v))).or_insert(NONE);
+        next[i] = *h;
+        *h = i as u32;
+    }
+    let mut partners: FxHashMap<VertexId, Vec<VertexId>> = FxHashMap::default();
+    for &v in &used {
+        let p = model.pos(v);
+        let (x, y, z) = key(p);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let mut i = head.get(&(x + dx, y + dy, z + dz)).copied().unwrap_or(NONE);
+                    while i != NONE {
+                        let w = used[i as usize];
+                        let d = model.pos(w).distance(p);
+                        if w != v && d > eps && d <= cell {
+                            partners.entry(v).or_default().push(w);
+                        }
+                        i = next[i as usize];
+                    }
+                }
+            }
+        }
+    }
+    if partners.is_empty() {
+        return Vec::new();
+    }
+    let mut has = vec![false; out.vertices.len()];
+    for v in partners.keys() {
+        has[v.idx()] = true;
+    }
+    let mut joins = Vec::new();
+    for f in &out.faces {
+        for c in &f.contours {
+            for i in 0..c.len() {
+                let (a, b) = (c[i], c[(i + 1) % c.len()]);
+                for (x, y) in [(a, b), (b, a)] {
+                    if !has[x.idx()] {
+                        continue;
+                    }
+                    for &w in &partners[&x] {
+                        if w != y
+                            && geom::predicates::on_edge_interior(
+                                out.pos(w),
+                                out.pos(x),
+                                out.pos(y),
+                                eps,
+                            )
+                            .is_some()
+                        {
+                            joins.push((w, x));
+                        }
+                    }
+                }
+            }
+        }
+    }
+    joins
 }
 
 /// Vertex joins, (from, to).
