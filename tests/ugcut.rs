@@ -586,3 +586,20 @@ fn a_vertex_just_beyond_epsilon_of_a_corner_joins_it() {
         assert!((a - b).abs() <= 1e-9 * b, "-l {len}: {a} vs {b}");
     }
 }
+
+/// A wall's end strip 1.7 to 2.6 epsilon wide and 2.8 m tall beside a
+/// facade piece whose edge leaves the strip's corner nearly along the
+/// strip's side (fixtures/cut/wall-end-strip-divided-on-one-side.ug,
+/// property seed 13621): that side was left undivided and the other side
+/// was divided, so the strip's triangles were needles (2 to 25 defects at
+/// these lengths before). Now neither side of a strip under 16 epsilon
+/// wide is divided along it.
+#[test]
+fn a_thin_strip_is_divided_on_neither_side() {
+    cuts_cleanly(
+        "cut/wall-end-strip-divided-on-one-side.ug",
+        "1.7920064398553084e-5",
+        &["0.7", "0.3", "0.1", "2"],
+        1e-9,
+    );
+}

@@ -243,6 +243,9 @@ struct Divisions {
     edges: Vec<(VertexId, VertexId)>,
     start: Vec<u32>,
     ends: Vec<u32>,
+    /// Per edge, the other edges of its faces that come within
+    /// [`THIN`]·eps of it without sharing an end (see [`thin_partners`]).
+    thin: FxHashMap<(VertexId, VertexId), Vec<(VertexId, VertexId)>>,
 }
 
 /// Every edge of the top-level faces, lower vertex id first, sorted, and
@@ -417,6 +420,75 @@ fn feet(m: &Model, eps: f64) -> FxHashMap<(VertexId, VertexId), Vec<f64>> {
     out
 }
 
+/// Per edge of a face (lower vertex id first), the face's other edges
+/// that come within [`THIN`]·`eps` of it without sharing an end: the two
+/// sides of a strip a few epsilons wide. (Two segments of one plane that
+/// do not cross are nearest at an end of one of them, so it is enough to
+/// look from each vertex at the edges near it.) A division point on one
+/// side of such a strip would be joined only to points far along the
+/// other: a needle (property seed 13621, a wall's end 1.7 to 2.6 epsilon
+/// wide and 2.8 m tall whose one side was divided and the other, along
+/// a neighbour's edge, was not).
+fn thin_partners(
+    m: &Model,
+    eps: f64,
+) -> FxHashMap<(VertexId, VertexId), Vec<(VertexId, VertexId)>> {
+    let mut out: FxHashMap<(VertexId, VertexId), Vec<(VertexId, VertexId)>> = FxHashMap::default();
+    if eps.is_nan() || eps <= 0.0 {
+        return out;
+    }
+    let reach = THIN * eps;
+    let key = |a: VertexId, b: VertexId| if a < b { (a, b) } else { (b, a) };
+    for f in m.top_faces() {
+        let face = &m.faces[f.idx()];
+        let edges: Vec<(VertexId, VertexId)> = face
+            .contours
+            .iter()
+            .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
+            .filter(|(a, b)| a != b)
+            .map(|(a, b)| key(a, b))
+            .collect();
+        let index = (edges.len() > 24).then(|| {
+            BoxIndex::new(edges.iter().enumerate().map(|(k, &(a, b))| {
+                let (p, q) = (m.pos(a), m.pos(b));
+                (
+                    p.min(q) - DVec3::splat(reach),
+                    p.max(q) + DVec3::splat(reach),
+                    k as u32,
+                )
+            }))
+        });
+        for (i, &e) in edges.iter().enumerate() {
+            for v in [e.0, e.1] {
+                let x = m.pos(v);
+                let near: Vec<usize> = match &index {
+                    Some(ix) => ix
+                        .query(x - DVec3::splat(reach), x + DVec3::splat(reach))
+                        .into_iter()
+                        .map(|k| k as usize)
+                        .collect(),
+                    None => (0..edges.len()).collect(),
+                };
+                for k in near {
+                    let g = edges[k];
+                    if k == i || g.0 == e.0 || g.0 == e.1 || g.1 == e.0 || g.1 == e.1 {
+                        continue;
+                    }
+                    if geom::point_segment_distance(x, m.pos(g.0), m.pos(g.1)).0 <= reach {
+                        out.entry(e).or_default().push(g);
+                        out.entry(g).or_default().push(e);
+                    }
+                }
+            }
+        }
+    }
+    for v in out.values_mut() {
+        v.sort_unstable();
+        v.dedup();
+    }
+    out
+}
+
 struct Ctx<'m> {
     m: &'m Model,
     opts: Options,
@@ -478,10 +550,15 @@ impl Ctx<'_> {
             // cut into needles. A division point within THIN epsilons of an
             // edge sharing an end with its own is left out (the feet
             // already are, in `feet`): such edges are not divided there.
+            // Nor is one within THIN epsilons of another edge of its faces
+            // across a strip (see `thin_partners`).
             let reach = THIN * self.opts.eps;
+            let thin = self.div.thin.get(&key);
             let clear_of_others = |t: f64| {
                 let x = p + (q - p) * t;
-                [key.0, key.1].iter().all(|v| {
+                thin.into_iter().flatten().all(|&(a, b)| {
+                    geom::point_segment_distance(x, self.pos(a), self.pos(b)).0 > reach
+                }) && [key.0, key.1].iter().all(|v| {
                     let d = &self.div;
                     d.ends[d.start[v.idx()] as usize..d.start[v.idx() + 1] as usize]
                         .iter()
@@ -677,6 +754,7 @@ fn mesh_all(m: &Model, opts: Options, mut stats: Stats) -> Result<(Model, Stats,
             Divisions {
                 map: FxHashMap::default(),
                 feet: feet(m, opts.eps),
+                thin: thin_partners(m, opts.eps),
                 edges,
                 start,
                 ends,
