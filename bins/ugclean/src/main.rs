@@ -71,9 +71,10 @@ fn main() -> std::process::ExitCode {
             eprintln!("{tents} tents' tips joined to a neighbour");
             if !args.keep_enclosed {
                 eprintln!(
-                    "{} enclosed faces removed, area {}",
+                    "{} enclosed faces removed, area {}; {} kept where removing them would leave an edge walked twice the same way",
                     enc.removed.len(),
-                    enc.area_removed
+                    enc.area_removed,
+                    enc.spared
                 );
                 if c.verbose > 1 {
                     for r in &enc.removed {

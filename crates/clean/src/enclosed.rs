@@ -94,12 +94,18 @@ pub struct Stats {
     /// Names (or `#k`, the face's place among the faces) of the faces removed.
     pub removed: Vec<String>,
     pub area_removed: f64,
+    /// Enclosed faces kept because removing them would leave an edge
+    /// walked the same way by the two faces left on it (see [`spare`]).
+    pub spared: usize,
 }
 
 /// The model without its enclosed faces (and the vertices only they used).
 pub fn remove(m: &Model, eps: f64) -> (Model, Stats) {
-    let sealed = enclosed(m, eps);
-    let mut stats = Stats::default();
+    let mut sealed = enclosed(m, eps);
+    let mut stats = Stats {
+        spared: spare(m, &mut sealed),
+        ..Stats::default()
+    };
     for (k, f) in m.top_faces().enumerate() {
         if sealed[f.idx()] {
             let face = &m.faces[f.idx()];
@@ -118,6 +124,79 @@ pub fn remove(m: &Model, eps: f64) -> (Model, Stats) {
         return (m.clone(), stats);
     }
     (crate::coincident::remove_faces(m, &sealed), stats)
+}
+
+/// Keeps enclosed faces whose removal would leave an edge walked the same
+/// way by the two faces left on it: an inconsistently oriented edge where
+/// the model had none (property seed 13847, a triangle export: a slab's
+/// end and a facade piece beyond it on an edge where an enclosed facade
+/// piece walked the other way). Of the enclosed faces on such an edge
+/// walking it the other way, the first in the file whose return makes no
+/// such edge elsewhere stays. Hidden faces cost only area and time; an
+/// inconsistent edge is a defect. Returns the faces kept.
+fn spare(m: &Model, sealed: &mut [bool]) -> usize {
+    use rustc_hash::FxHashMap;
+    // Per undirected edge, its uses: (face, walked from the lower id).
+    let mut uses: FxHashMap<(ug::VertexId, ug::VertexId), Vec<(FaceId, bool)>> =
+        FxHashMap::default();
+    for f in m.top_faces() {
+        for c in &m.faces[f.idx()].contours {
+            for i in 0..c.len() {
+                let (a, b) = (c[i], c[(i + 1) % c.len()]);
+                if a != b {
+                    uses.entry((a.min(b), a.max(b)))
+                        .or_default()
+                        .push((f, a < b));
+                }
+            }
+        }
+    }
+    // Whether an edge's uses by kept faces are two walking it one way.
+    let bad = |u: &[(FaceId, bool)], sealed: &[bool]| {
+        let mut kept = u.iter().filter(|(f, _)| !sealed[f.idx()]);
+        match (kept.next(), kept.next(), kept.next()) {
+            (Some(x), Some(y), None) => x.1 == y.1,
+            _ => false,
+        }
+    };
+    let mut keys: Vec<(ug::VertexId, ug::VertexId)> = uses
+        .iter()
+        .filter(|(_, u)| u.iter().any(|(f, _)| sealed[f.idx()]) && bad(u, sealed))
+        .map(|(&k, _)| k)
+        .collect();
+    keys.sort_unstable();
+    let mut spared = 0;
+    for key in keys {
+        let u = &uses[&key];
+        if !bad(u, sealed) {
+            continue;
+        }
+        let way = u
+            .iter()
+            .find(|(f, _)| !sealed[f.idx()])
+            .is_some_and(|x| x.1);
+        let mut cands: Vec<FaceId> = u
+            .iter()
+            .filter(|(f, w)| sealed[f.idx()] && *w != way)
+            .map(|(f, _)| *f)
+            .collect();
+        cands.sort_unstable();
+        for f in cands {
+            sealed[f.idx()] = false;
+            let harmless = m.faces[f.idx()].contours.iter().all(|c| {
+                (0..c.len()).all(|i| {
+                    let (a, b) = (c[i], c[(i + 1) % c.len()]);
+                    a == b || !bad(&uses[&(a.min(b), a.max(b))], sealed)
+                })
+            });
+            if harmless {
+                spared += 1;
+                break;
+            }
+            sealed[f.idx()] = true;
+        }
+    }
+    spared
 }
 
 /// Which top-level faces are enclosed (indexed by `FaceId`; false for faces
@@ -433,4 +512,57 @@ fn hemisphere(n: usize) -> Vec<DVec3> {
             DVec3::new(r * a.cos(), r * a.sin(), z)
         })
         .collect()
+}
+
+#[cfg(test)]
+mod spare_tests {
+    use super::*;
+
+    fn model(src: &str) -> Model {
+        ug::parse(src.as_bytes(), "t").unwrap().model
+    }
+
+    fn face(m: &Model, name: &str) -> usize {
+        m.faces
+            .iter()
+            .position(|f| f.name.as_deref() == Some(name))
+            .unwrap()
+    }
+
+    const V: &str = "v a 0 0 0; v b 1 0 0; v c 1 1 0; v d 0 -1 0; v e 0 0 1; v g 1 0 1;\n";
+
+    /// Three faces on edge a–b: `up` and `flat` walk it a→b, `down` b→a.
+    /// Removing `down` would leave the other two walking it the same way.
+    #[test]
+    fn an_enclosed_face_stays_where_its_removal_leaves_an_edge_walked_twice_one_way() {
+        let m = model(&format!(
+            "{V}f flat (a b c); f up (a b g e); f down (b a d);\n"
+        ));
+        let mut sealed = vec![false; m.faces.len()];
+        sealed[face(&m, "down")] = true;
+        assert_eq!(spare(&m, &mut sealed), 1);
+        assert!(!sealed[face(&m, "down")]);
+        // Removing it where the two left walk it both ways: it goes.
+        let m = model(&format!(
+            "{V}f flat (a b c); f up (b a e g); f down (b a d);\n"
+        ));
+        let mut sealed = vec![false; m.faces.len()];
+        sealed[face(&m, "down")] = true;
+        assert_eq!(spare(&m, &mut sealed), 0);
+        assert!(sealed[face(&m, "down")]);
+    }
+
+    /// The face that would stay walks another edge the same way as the one
+    /// kept face there: keeping it would only move the defect, so it goes.
+    #[test]
+    fn a_face_whose_return_makes_another_such_edge_goes() {
+        let m = model(&format!(
+            "{V}f flat (a b c); f up (a b g e); f down (b a d); f side (d b e);\n"
+        ));
+        // (`down` and `side` both walk d→b.)
+        let mut sealed = vec![false; m.faces.len()];
+        sealed[face(&m, "down")] = true;
+        assert_eq!(spare(&m, &mut sealed), 0);
+        assert!(sealed[face(&m, "down")]);
+    }
 }
