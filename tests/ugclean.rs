@@ -645,3 +645,38 @@ fn the_kept_face_takes_a_twin_contour_that_names_more_corners() {
         assert_eq!(r[key].as_array().unwrap().len(), 0, "{key}:\n{out}");
     }
 }
+
+/// Two coincident end pieces on records of their own about 2 epsilon
+/// apart, which sharing cannot join (fixtures/clean/end-piece-on-records-of-its-own.ug,
+/// property seed 13174): the kept wall piece takes the removed slab
+/// piece's contour, so the slab's top and the wall's side meet it along
+/// the edges they met the slab piece on. Before, two inconsistently
+/// oriented edges after ugclean.
+#[test]
+fn the_kept_face_takes_a_twin_contour_its_neighbours_walk() {
+    let (out, r) = coincident_step_checked(
+        "clean/end-piece-on-records-of-its-own.ug",
+        "1.1117431623489092e-5",
+    );
+    assert!(
+        !out.contains("f wingslab0.2.i3.c2 "),
+        "the slab's piece goes:\n{out}"
+    );
+    assert!(
+        out.contains(
+            "f wing2.2.c4 (wing2.5.iv201 wing0.0.iv179 wing0.2.iv269 wing0.2.i11.cv5 wing0.2.i11.cv6) wall;"
+        ),
+        "{out}"
+    );
+    for key in [
+        "inconsistent",
+        "degenerate",
+        "nonplanar",
+        "tvertices",
+        "coincident",
+        "overlapping",
+        "intersecting",
+    ] {
+        assert_eq!(r[key].as_array().unwrap().len(), 0, "{key}:\n{out}");
+    }
+}

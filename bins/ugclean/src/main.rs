@@ -57,7 +57,7 @@ fn main() -> std::process::ExitCode {
         let (out, tents) = clean::group::collapse_tents(out, eps);
         if c.verbose > 0 {
             eprintln!(
-                "epsilon {eps:e}; {} coincident pairs; removed {} faces, area {}; {} kept faces took their removed twin's contours (which name more corners); {} vertex records of kept faces replaced by the removed twins'; {} edges that two contours of a face then walked both ways joined",
+                "epsilon {eps:e}; {} coincident pairs; removed {} faces, area {}; {} kept faces took a removed twin's contours; {} vertex records of kept faces replaced by the removed twins'; {} edges that two contours of a face then walked both ways joined",
                 st.pairs,
                 st.removed.len(),
                 st.area_removed,
