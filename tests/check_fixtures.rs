@@ -12,6 +12,12 @@ const CASES: &[(&str, Option<&str>, usize, &[&str])] = &[
     ("intersect", Some("intersect"), 1, &["boundary"]),
     ("wall-on-floor", Some("intersect"), 1, &["boundary"]),
     ("leg-on-tilted-column", None, 0, &["boundary", "nonpatch"]),
+    (
+        "globe-pole-on-a-column-top",
+        None,
+        0,
+        &["boundary", "nonpatch"],
+    ),
     ("overlap", Some("overlap"), 1, &["boundary"]),
     ("coincident", Some("coincident"), 1, &["boundary"]),
     ("degenerate", Some("degenerate"), 2, &["boundary"]),
