@@ -16,7 +16,8 @@
 # Environment: SEED (default 1), STOREYS (default 2 under 20000 faces, else
 # 3), OBLIQUE=1 (with an oblique wing and a pitched roof: ugbuilding --wing
 # --pitched), TRIANGLES=1 (the building exported as triangles: ugbuilding
-# --triangles), STAIRS=1 (stairs and ramps: ugbuilding --stairs), LEN (ugcut -l; default ugcut's, 2% of the diagonal), KEEP=1 keeps the
+# --triangles), STAIRS=1 (stairs and ramps: ugbuilding --stairs), CURVED=1 (round
+# columns, globe lamps and pipes: ugbuilding --curved), LEN (ugcut -l; default ugcut's, 2% of the diagonal), KEEP=1 keeps the
 # directory of models, NO_BUILD=1 uses target/release as it is.
 
 set -euo pipefail
@@ -75,9 +76,9 @@ for n in "${sizes[@]}"; do
     storeys=${STOREYS:-$([ "$n" -lt 20000 ] && echo 2 || echo 3)}
     d="$tmp/$n"
     mkdir -p "$d"
-    "$bin/ugbuilding" --cad --faces "$n" --storeys "$storeys" --seed "$SEED" ${TRIANGLES:+--triangles} ${OBLIQUE:+--wing --pitched} ${STAIRS:+--stairs} -o "$d/0.ug"
+    "$bin/ugbuilding" --cad --faces "$n" --storeys "$storeys" --seed "$SEED" ${TRIANGLES:+--triangles} ${OBLIQUE:+--wing --pitched} ${STAIRS:+--stairs} ${CURVED:+--curved} -o "$d/0.ug"
     echo
-    echo "### ugbuilding --cad --faces $n --storeys $storeys --seed $SEED${TRIANGLES:+ --triangles}${OBLIQUE:+ --wing --pitched}${STAIRS:+ --stairs}: $(faces "$d/0.ug") faces"
+    echo "### ugbuilding --cad --faces $n --storeys $storeys --seed $SEED${TRIANGLES:+ --triangles}${OBLIQUE:+ --wing --pitched}${STAIRS:+ --stairs}${CURVED:+ --curved}: $(faces "$d/0.ug") faces"
     echo
     echo "| stage | faces in → out | s | peak MB |"
     echo "|---|---:|---:|---:|"

@@ -39,10 +39,13 @@ use ug::Model;
 /// third, and every sixth of the wings) with a pitched roof.
 /// (`UG_CAD=X,Y,S` sets rooms along x and y and storeys for every seed,
 /// Every even seed has stairs and ramps, except the regression seeds
-/// ([`AS_FOUND`]), which stay the models their bugs were found in.
+/// ([`AS_FOUND`]), which stay the models their bugs were found in; every
+/// seventh (3 mod 7, not a regression seed) round columns, globe lamps
+/// and pipes (`Cad::curved`).
 /// `UG_TRIANGLES=1` exports every seed as triangles, `UG_OBLIQUE=1`
-/// gives every seed the wing and the roof, and `UG_STAIRS=1` stairs and
-/// ramps (`UG_STAIRS=0` none): for [`more_seeds`] by hand.)
+/// gives every seed the wing and the roof, `UG_STAIRS=1` stairs and
+/// ramps (`UG_STAIRS=0` none) and `UG_CURVED=1` the curved things
+/// (`UG_CURVED=0` none): for [`more_seeds`] by hand.)
 fn config(seed: u64) -> Cad {
     let cfg = size(seed);
     let env = |k: &str| std::env::var(k).is_ok_and(|v| v == "1");
@@ -50,6 +53,11 @@ fn config(seed: u64) -> Cad {
         triangles: seed % 5 == 2 || env("UG_TRIANGLES"),
         wing: seed % 3 == 1 || env("UG_OBLIQUE"),
         pitched: seed % 3 == 2 || seed % 6 == 1 || env("UG_OBLIQUE"),
+        curved: match std::env::var("UG_CURVED").as_deref() {
+            Ok("1") => true,
+            Ok("0") => false,
+            _ => seed % 7 == 3 && !found(seed),
+        },
         stairs: match std::env::var("UG_STAIRS").as_deref() {
             Ok("1") => true,
             Ok("0") => false,
@@ -60,6 +68,12 @@ fn config(seed: u64) -> Cad {
         },
         ..cfg
     }
+}
+
+/// Whether seed `s` is a regression seed (drawn without the curved things
+/// added since).
+fn found(s: u64) -> bool {
+    AS_FOUND.contains(&s) || FOUND_WITH_STAIRS.contains(&s) || FOUND_LARGER.contains(&s)
 }
 
 /// Seeds that once failed, drawn as they were then (without the stairs

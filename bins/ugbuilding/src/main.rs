@@ -13,7 +13,8 @@ Examples:
   ugbuilding --cad --rooms 2 --storeys 3 --seed 5         a small three-storey one
   ugbuilding --cad --faces 2000 --triangles                exported as triangles (STL-like)
   ugbuilding --cad --rooms 3 --wing --pitched --seed 4    an oblique wing and a pitched roof
-  ugbuilding --cad --rooms 2 --stairs                     stairs and ramps in some rooms";
+  ugbuilding --cad --rooms 2 --stairs                     stairs and ramps in some rooms
+  ugbuilding --cad --rooms 2 --curved                     round columns, globe lamps, pipes";
 
 /// Generate a CAD-like building as UniGrafix: a grid of 4 × 5 × 3 rooms
 /// (metres) with floors of 2 × 2 quads, walls of a lower and an upper face,
@@ -76,6 +77,12 @@ struct Args {
     /// next; ramps as wedges whose slope meets the floor at 2.9–7.1°.
     #[arg(long, requires = "cad")]
     stairs: bool,
+    /// Put curved things, tessellated, in about half the --cad building's
+    /// rooms: a round column through the floor into the ceiling slab, a
+    /// globe lamp whose pole touches or pokes into the ceiling, and a pipe
+    /// running obliquely across the room into the walls.
+    #[arg(long, requires = "cad")]
+    curved: bool,
     /// Seed of the random choices.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -170,6 +177,7 @@ fn main() -> std::process::ExitCode {
             cfg.wing = args.wing;
             cfg.pitched = args.pitched;
             cfg.stairs = args.stairs;
+            cfg.curved = args.curved;
             let model = building::cad(&cfg, args.seed);
             c.verbose(format!(
                 "{} storeys of {} × {} rooms, {} faces, {} vertices; seed {}",

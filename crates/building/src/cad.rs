@@ -112,6 +112,13 @@ pub struct Cad {
     /// a wedge rising at 1:20 to 1:8 (2.9–7.1°), so its slope meets the
     /// floor at a shallow angle, up to a landing.
     pub stairs: bool,
+    /// Curved things tessellated as CAD programs export them, in about
+    /// half the rooms: a round column (a 12- to 48-gon prism) through the
+    /// floor and into the ceiling slab, a globe lamp (a UV sphere of
+    /// triangles and quads) hanging under the ceiling, its pole touching
+    /// or pushed into it, and a pipe (a 12- to 16-gon prism) running
+    /// obliquely across the room with its ends pushed into the walls.
+    pub curved: bool,
 }
 
 impl Default for Cad {
@@ -136,6 +143,7 @@ impl Default for Cad {
             wing: false,
             pitched: false,
             stairs: false,
+            curved: false,
         }
     }
 }
@@ -180,6 +188,7 @@ mod stream {
     pub const WING: u64 = 108;
     pub const ROOF: u64 = 109;
     pub const STAIRS: u64 = 110;
+    pub const CURVED: u64 = 111;
 }
 
 struct B {
@@ -568,6 +577,12 @@ pub fn cad(cfg: &Cad, seed: u64) -> Model {
             stairs(&mut b, room, &mut rs);
         }
     }
+    if cfg.curved {
+        let mut rc = Rng::new(seed, stream::CURVED);
+        for room in &rooms {
+            curved(&mut b, room, &mut rc);
+        }
+    }
     if cfg.wing {
         let mut rw = Rng::new(seed, stream::WING);
         wing(&mut b, cfg, (nx, ny), (x1, y0, y1), &mut rw, seed);
@@ -858,6 +873,116 @@ fn pitched_roof(b: &mut B, lo: DVec2, hi: DVec2, ztop: f64, r: &mut Rng) {
         let off = w(a0, bb + WALL_OUT, 0.0) - w(a0, bb, 0.0);
         b.prism(n, &base, off, b.mats.facade, slab);
     }
+}
+
+/// A round column, a globe lamp and a pipe in about half the rooms (see
+/// [`Cad::curved`]); clear of the −x wall, where stairs may stand.
+fn curved(b: &mut B, room: &Room, r: &mut Rng) {
+    use std::f64::consts::PI;
+    if !pick(r, 0.5) {
+        return;
+    }
+    let zf = room.s as f64 * STOREY;
+    let zc = (room.s + 1) as f64 * STOREY - SLAB;
+    let name = format!("s{}r{}_{}", room.s, room.i, room.j);
+    let (ilo, ihi) = (room.ilo, room.ihi);
+    if ihi.x - ilo.x < 2.5 || ihi.y - ilo.y < 2.0 {
+        return;
+    }
+    // The column: from under the floor's top into the ceiling slab.
+    let n = 12 + 4 * (r.unit() * 10.0) as usize;
+    let rad = r.range(0.1, 0.25);
+    let c = DVec2::new(
+        r.range(ilo.x + 1.4, ihi.x - 0.5),
+        r.range(ilo.y + 0.5, ihi.y - 0.5),
+    );
+    let turn = r.range(0.0, PI);
+    let z0 = zf - r.range(0.0, 0.05);
+    let base: Vec<DVec3> = (0..n)
+        .map(|k| {
+            let t = turn + 2.0 * PI * k as f64 / n as f64;
+            DVec3::new(c.x + rad * t.cos(), c.y + rad * t.sin(), z0)
+        })
+        .collect();
+    let up = zc + r.range(0.0, 0.1) - z0;
+    b.prism(
+        &format!("{name}rc"),
+        &base,
+        DVec3::new(0.0, 0.0, up),
+        b.mats.column,
+        b.mats.column,
+    );
+    // The globe: its pole on the ceiling or pushed a little into it.
+    let (nu, nv) = (
+        8 + 4 * (r.unit() * 4.0) as usize,
+        4 + 2 * (r.unit() * 3.0) as usize,
+    );
+    let gr = r.range(0.1, 0.25);
+    let poke = if pick(r, 0.5) {
+        0.0
+    } else {
+        r.range(0.001, 0.05)
+    };
+    let g = DVec3::new(
+        r.range(ilo.x + 1.4, ihi.x - 0.4),
+        r.range(ilo.y + 0.4, ihi.y - 0.4),
+        zc + poke - gr,
+    );
+    let ring = |a: usize, k: usize| {
+        let (ph, th) = (PI * a as f64 / nv as f64, 2.0 * PI * k as f64 / nu as f64);
+        g + gr * DVec3::new(ph.sin() * th.cos(), ph.sin() * th.sin(), ph.cos())
+    };
+    let top = b.v(format!("{name}gl.n"), g + DVec3::new(0.0, 0.0, gr));
+    let bottom = b.v(format!("{name}gl.s"), g - DVec3::new(0.0, 0.0, gr));
+    let rows: Vec<Vec<VertexId>> = (1..nv)
+        .map(|a| {
+            (0..nu)
+                .map(|k| b.v(format!("{name}gl.v{a}_{k}"), ring(a, k)))
+                .collect()
+        })
+        .collect();
+    for k in 0..nu {
+        let k2 = (k + 1) % nu;
+        b.f(
+            format!("{name}gl.n{k}"),
+            vec![top, rows[0][k], rows[0][k2]],
+            b.mats.light,
+        );
+        b.f(
+            format!("{name}gl.s{k}"),
+            vec![bottom, rows[nv - 2][k2], rows[nv - 2][k]],
+            b.mats.light,
+        );
+        for a in 0..nv - 2 {
+            b.f(
+                format!("{name}gl.q{a}_{k}"),
+                vec![rows[a][k], rows[a + 1][k], rows[a + 1][k2], rows[a][k2]],
+                b.mats.light,
+            );
+        }
+    }
+    // The pipe: across the room in y, rising a little, its ends 2–10 cm
+    // into the walls.
+    let m = 12 + 4 * (r.unit() * 2.0) as usize;
+    let pr = r.range(0.03, 0.08);
+    let x = r.range(ilo.x + 1.4, ihi.x - 0.3);
+    let z = r.range(zc - 0.6, zc - 0.3);
+    let (y0, y1) = (ilo.y - r.range(0.02, 0.1), ihi.y + r.range(0.02, 0.1));
+    let dx = r.range(-0.2, 0.2);
+    let rise = r.range(0.0, 0.1);
+    let section: Vec<DVec3> = (0..m)
+        .map(|k| {
+            let t = 2.0 * PI * k as f64 / m as f64;
+            DVec3::new(x + pr * t.cos(), y0, z + pr * t.sin())
+        })
+        .collect();
+    b.prism(
+        &format!("{name}pp"),
+        &section,
+        DVec3::new(dx, y1 - y0, rise),
+        b.mats.metal,
+        b.mats.metal,
+    );
 }
 
 /// A flight of steps or a ramp along the room's −x wall, in about half the

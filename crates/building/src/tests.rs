@@ -535,3 +535,56 @@ fn assert_planar_and_outward(m: &Model, faces: &[&Face], what: &str) {
     }
     assert!(vol > 0.0, "{what} faces inward");
 }
+
+/// `--curved`: every round column, globe and pipe is a closed, outward,
+/// planar solid; over a few seeds each occurs, a globe's pole lies on or
+/// above its room's ceiling (touching it or pushed in), and a column
+/// reaches from under the floor's top into the ceiling slab.
+#[test]
+fn curved_things_are_closed_solids_touching_or_crossing_what_they_meet() {
+    let (mut columns, mut globes, mut pipes) = (0, 0, 0);
+    for seed in 1..=8 {
+        let cfg = Cad {
+            jitter: 0.0,
+            flipped: 0.0,
+            duplicates: 0.0,
+            curved: true,
+            ..Cad::default()
+        };
+        let m = cad(&cfg, seed);
+        let mut solids: HashMap<String, Vec<&Face>> = HashMap::new();
+        for f in &m.faces {
+            let name = f.name.as_deref().unwrap();
+            let solid = name.split('.').next().unwrap();
+            if solid.ends_with("rc") || solid.ends_with("gl") || solid.ends_with("pp") {
+                solids.entry(solid.to_string()).or_default().push(f);
+            }
+        }
+        for (name, faces) in &solids {
+            assert_planar_and_outward(&m, faces, &format!("seed {seed}: {name}"));
+            let zs = faces
+                .iter()
+                .flat_map(|f| f.contours[0].iter().map(|&v| m.pos(v).z));
+            let (lo, hi) = zs.fold((f64::MAX, f64::MIN), |(a, b), z| (a.min(z), b.max(z)));
+            // The room's storey, from the name `s{storey}r…`.
+            let s: f64 = name[1..name.find('r').unwrap()].parse().unwrap();
+            let (zf, zc) = (s * cad::STOREY, (s + 1.0) * cad::STOREY - cad::SLAB);
+            if name.ends_with("rc") {
+                columns += 1;
+                assert!(lo <= zf && hi >= zc, "{name}: {lo}..{hi}");
+            } else if name.ends_with("gl") {
+                globes += 1;
+                assert!(
+                    hi >= zc - 1e-9 && hi <= zc + 0.05 + 1e-9,
+                    "{name}: top {hi}"
+                );
+            } else {
+                pipes += 1;
+            }
+        }
+    }
+    assert!(
+        columns >= 3 && globes >= 3 && pipes >= 3,
+        "{columns} columns, {globes} globes, {pipes} pipes"
+    );
+}
