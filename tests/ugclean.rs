@@ -531,6 +531,14 @@ fn a_tents_tip_joins_a_neighbour() {
     }
 }
 
+/// Asserts that ugcheck's report `r` of `out` has no finding in any of
+/// the categories `keys`.
+fn assert_none(r: &serde_json::Value, keys: &[&str], out: &str) {
+    for key in keys {
+        assert_eq!(r[key].as_array().unwrap().len(), 0, "{key}:\n{out}");
+    }
+}
+
 /// `ugclean --keep-enclosed` on a fixture at epsilon `eps`: its output and
 /// ugcheck's report of it.
 fn coincident_step_checked(path: &str, eps: &str) -> (String, serde_json::Value) {
@@ -559,16 +567,18 @@ fn moves_left_after_vetoes_bend_no_face() {
         "clean/vetoed-corners-bend-a-desk-bottom.ug",
         "1.4867539729602339e-5",
     );
-    for key in [
-        "degenerate",
-        "intersecting",
-        "tvertices",
-        "nonplanar",
-        "overlapping",
-        "coincident",
-    ] {
-        assert_eq!(r[key].as_array().unwrap().len(), 0, "{key}:\n{out}");
-    }
+    assert_none(
+        &r,
+        &[
+            "degenerate",
+            "intersecting",
+            "tvertices",
+            "nonplanar",
+            "overlapping",
+            "coincident",
+        ],
+        &out,
+    );
     // The pair is still resolved: the later face of the same material goes.
     assert!(out.contains("f s0r2_1f0.0.i1 "), "{out}");
     assert!(!out.contains("f s0r2_1f1.0.c2 "), "{out}");
@@ -588,9 +598,7 @@ fn a_join_that_puts_a_corner_on_an_edge_is_repaired() {
         "the floor piece goes:\n{out}"
     );
     // (Four faces cut out of a model: their open edges are no concern.)
-    for key in ["degenerate", "intersecting", "tvertices"] {
-        assert_eq!(r[key].as_array().unwrap().len(), 0, "{key}:\n{out}");
-    }
+    assert_none(&r, &["degenerate", "intersecting", "tvertices"], &out);
 }
 
 /// A coincident pair's records are not shared when that would tilt a face
@@ -603,9 +611,11 @@ fn sharing_a_pairs_records_makes_no_t_vertex() {
         "clean/tilted-wall-bottom-over-tiles.ug",
         "1.6427471791923383e-5",
     );
-    for key in ["degenerate", "intersecting", "tvertices", "nonplanar"] {
-        assert_eq!(r[key].as_array().unwrap().len(), 0, "{key}:\n{out}");
-    }
+    assert_none(
+        &r,
+        &["degenerate", "intersecting", "tvertices", "nonplanar"],
+        &out,
+    );
     // The pair is still resolved: the later face of the same material goes.
     assert!(out.contains("f s0w1p0.0.i4 "), "{out}");
     assert!(!out.contains("f wing0.0.i2 "), "{out}");
@@ -634,16 +644,18 @@ fn the_kept_face_takes_a_twin_contour_that_names_more_corners() {
         ),
         "{out}"
     );
-    for key in [
-        "inconsistent",
-        "degenerate",
-        "nonplanar",
-        "tvertices",
-        "coincident",
-        "overlapping",
-    ] {
-        assert_eq!(r[key].as_array().unwrap().len(), 0, "{key}:\n{out}");
-    }
+    assert_none(
+        &r,
+        &[
+            "inconsistent",
+            "degenerate",
+            "nonplanar",
+            "tvertices",
+            "coincident",
+            "overlapping",
+        ],
+        &out,
+    );
 }
 
 /// Two coincident end pieces on records of their own about 2 epsilon
@@ -668,15 +680,17 @@ fn the_kept_face_takes_a_twin_contour_its_neighbours_walk() {
         ),
         "{out}"
     );
-    for key in [
-        "inconsistent",
-        "degenerate",
-        "nonplanar",
-        "tvertices",
-        "coincident",
-        "overlapping",
-        "intersecting",
-    ] {
-        assert_eq!(r[key].as_array().unwrap().len(), 0, "{key}:\n{out}");
-    }
+    assert_none(
+        &r,
+        &[
+            "inconsistent",
+            "degenerate",
+            "nonplanar",
+            "tvertices",
+            "coincident",
+            "overlapping",
+            "intersecting",
+        ],
+        &out,
+    );
 }

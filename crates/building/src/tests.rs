@@ -463,28 +463,15 @@ fn the_wing_and_the_pitched_roof_are_closed_planar_solids_at_an_angle() {
 fn stairs_and_ramps_are_closed_solids_and_ramps_are_shallow() {
     let (mut flights, mut ramps) = (0, 0);
     for seed in 1..=12 {
-        let cfg = Cad {
-            jitter: 0.0,
-            flipped: 0.0,
-            duplicates: 0.0,
-            stairs: true,
-            ..Cad::default()
-        };
-        let m = cad(&cfg, seed);
-        let mut solids: HashMap<String, Vec<&Face>> = HashMap::new();
-        for f in &m.faces {
-            let name = f.name.as_deref().unwrap();
-            let solid = name.split('.').next().unwrap();
+        let m = without_dirt(seed, |c| c.stairs = true);
+        let solids = solids(&m, |solid| {
             let kind = solid.trim_start_matches(|c: char| c != '_');
             let kind = kind.trim_start_matches(|c: char| c == '_' || c.is_ascii_digit());
-            if kind.starts_with("st")
+            kind.starts_with("st")
                 || kind.starts_with("sl")
                 || kind.starts_with("ramp")
                 || kind == "rl"
-            {
-                solids.entry(solid.to_string()).or_default().push(f);
-            }
-        }
+        });
         let normal = |f: &Face| face_normal(&m, f);
         for (name, faces) in &solids {
             assert_planar_and_outward(&m, faces, &format!("seed {seed}: {name}"));
@@ -511,6 +498,32 @@ fn stairs_and_ramps_are_closed_solids_and_ramps_are_shallow() {
         flights >= 3 && ramps >= 3,
         "{flights} flights, {ramps} ramps"
     );
+}
+
+/// The CAD building of `seed` without flips, duplicates or jitter, with
+/// `set` applied to its configuration.
+fn without_dirt(seed: u64, set: impl Fn(&mut Cad)) -> Model {
+    let mut cfg = Cad {
+        jitter: 0.0,
+        flipped: 0.0,
+        duplicates: 0.0,
+        ..Cad::default()
+    };
+    set(&mut cfg);
+    cad(&cfg, seed)
+}
+
+/// The faces of each solid (the part of a face's name before its first
+/// dot) whose name `keep` accepts.
+fn solids(m: &Model, keep: impl Fn(&str) -> bool) -> HashMap<String, Vec<&Face>> {
+    let mut out: HashMap<String, Vec<&Face>> = HashMap::new();
+    for f in &m.faces {
+        let solid = f.name.as_deref().unwrap().split('.').next().unwrap();
+        if keep(solid) {
+            out.entry(solid.to_string()).or_default().push(f);
+        }
+    }
+    out
 }
 
 /// A face's unit normal (Newell's, over its outer contour).
@@ -544,22 +557,10 @@ fn assert_planar_and_outward(m: &Model, faces: &[&Face], what: &str) {
 fn curved_things_are_closed_solids_touching_or_crossing_what_they_meet() {
     let (mut columns, mut globes, mut pipes) = (0, 0, 0);
     for seed in 1..=8 {
-        let cfg = Cad {
-            jitter: 0.0,
-            flipped: 0.0,
-            duplicates: 0.0,
-            curved: true,
-            ..Cad::default()
-        };
-        let m = cad(&cfg, seed);
-        let mut solids: HashMap<String, Vec<&Face>> = HashMap::new();
-        for f in &m.faces {
-            let name = f.name.as_deref().unwrap();
-            let solid = name.split('.').next().unwrap();
-            if solid.ends_with("rc") || solid.ends_with("gl") || solid.ends_with("pp") {
-                solids.entry(solid.to_string()).or_default().push(f);
-            }
-        }
+        let m = without_dirt(seed, |c| c.curved = true);
+        let solids = solids(&m, |solid| {
+            solid.ends_with("rc") || solid.ends_with("gl") || solid.ends_with("pp")
+        });
         for (name, faces) in &solids {
             assert_planar_and_outward(&m, faces, &format!("seed {seed}: {name}"));
             let zs = faces

@@ -303,6 +303,53 @@ fn edges_at_vertices(m: &Model) -> (Vec<(VertexId, VertexId)>, Vec<u32>, Vec<u32
 /// building 0.8% more patches and gained nothing over 16.)
 const THIN: f64 = 16.0;
 
+/// A face's edges (in contour order, zero-length ones left out) and, for a
+/// face of many, a box index of them widened by `reach`: which edges may
+/// lie within `reach` of a point ([`FaceEdges::near`]).
+struct FaceEdges {
+    edges: Vec<(VertexId, VertexId)>,
+    index: Option<BoxIndex>,
+    reach: f64,
+}
+
+impl FaceEdges {
+    fn new(m: &Model, face: &Face, reach: f64) -> FaceEdges {
+        let edges: Vec<(VertexId, VertexId)> = face
+            .contours
+            .iter()
+            .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
+            .filter(|(a, b)| a != b)
+            .collect();
+        let index = (edges.len() > 24).then(|| {
+            BoxIndex::new(edges.iter().enumerate().map(|(k, &(a, b))| {
+                let (p, q) = (m.pos(a), m.pos(b));
+                (
+                    p.min(q) - DVec3::splat(reach),
+                    p.max(q) + DVec3::splat(reach),
+                    k as u32,
+                )
+            }))
+        });
+        FaceEdges {
+            edges,
+            index,
+            reach,
+        }
+    }
+
+    /// The indices of the edges that may lie within `reach` of `x`.
+    fn near(&self, x: DVec3) -> Vec<usize> {
+        match &self.index {
+            Some(ix) => ix
+                .query(x - DVec3::splat(self.reach), x + DVec3::splat(self.reach))
+                .into_iter()
+                .map(|k| k as usize)
+                .collect(),
+            None => (0..self.edges.len()).collect(),
+        }
+    }
+}
+
 /// The feet of thin parts: for every face, each vertex that lies within
 /// [`THIN`]·`eps` (and more than `eps`) of one of the face's boundary edges,
 /// its foot on that edge if it falls more than 2·`eps` from the edge's ends.
@@ -321,36 +368,14 @@ fn feet(m: &Model, eps: f64) -> FxHashMap<(VertexId, VertexId), Vec<f64>> {
     let reach = THIN * eps;
     for f in m.top_faces() {
         let face = &m.faces[f.idx()];
-        let edges: Vec<(VertexId, VertexId)> = face
-            .contours
-            .iter()
-            .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
-            .filter(|(a, b)| a != b)
-            .collect();
-        let index = (edges.len() > 24).then(|| {
-            BoxIndex::new(edges.iter().enumerate().map(|(k, &(a, b))| {
-                let (p, q) = (m.pos(a), m.pos(b));
-                (
-                    p.min(q) - DVec3::splat(reach),
-                    p.max(q) + DVec3::splat(reach),
-                    k as u32,
-                )
-            }))
-        });
+        let fe = FaceEdges::new(m, face, reach);
+        let edges = &fe.edges;
         let mut verts: Vec<VertexId> = face.contours.iter().flatten().copied().collect();
         verts.sort_unstable();
         verts.dedup();
         for &v in &verts {
             let x = m.pos(v);
-            let near: Vec<usize> = match &index {
-                Some(ix) => ix
-                    .query(x - DVec3::splat(reach), x + DVec3::splat(reach))
-                    .into_iter()
-                    .map(|k| k as usize)
-                    .collect(),
-                None => (0..edges.len()).collect(),
-            };
-            for k in near {
+            for k in fe.near(x) {
                 let (a, b) = edges[k];
                 if a == v || b == v {
                     continue;
@@ -440,36 +465,12 @@ fn thin_partners(
     let reach = THIN * eps;
     let key = |a: VertexId, b: VertexId| if a < b { (a, b) } else { (b, a) };
     for f in m.top_faces() {
-        let face = &m.faces[f.idx()];
-        let edges: Vec<(VertexId, VertexId)> = face
-            .contours
-            .iter()
-            .flat_map(|c| (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()])))
-            .filter(|(a, b)| a != b)
-            .map(|(a, b)| key(a, b))
-            .collect();
-        let index = (edges.len() > 24).then(|| {
-            BoxIndex::new(edges.iter().enumerate().map(|(k, &(a, b))| {
-                let (p, q) = (m.pos(a), m.pos(b));
-                (
-                    p.min(q) - DVec3::splat(reach),
-                    p.max(q) + DVec3::splat(reach),
-                    k as u32,
-                )
-            }))
-        });
+        let fe = FaceEdges::new(m, &m.faces[f.idx()], reach);
+        let edges: Vec<(VertexId, VertexId)> = fe.edges.iter().map(|&(a, b)| key(a, b)).collect();
         for (i, &e) in edges.iter().enumerate() {
             for v in [e.0, e.1] {
                 let x = m.pos(v);
-                let near: Vec<usize> = match &index {
-                    Some(ix) => ix
-                        .query(x - DVec3::splat(reach), x + DVec3::splat(reach))
-                        .into_iter()
-                        .map(|k| k as usize)
-                        .collect(),
-                    None => (0..edges.len()).collect(),
-                };
-                for k in near {
+                for k in fe.near(x) {
                     let g = edges[k];
                     if k == i || g.0 == e.0 || g.0 == e.1 || g.1 == e.0 || g.1 == e.1 {
                         continue;
