@@ -531,6 +531,17 @@ fn a_tents_tip_joins_a_neighbour() {
     }
 }
 
+/// Every defect category of ugcheck's JSON report.
+const DEFECTS: &[&str] = &[
+    "inconsistent",
+    "degenerate",
+    "nonplanar",
+    "tvertices",
+    "coincident",
+    "overlapping",
+    "intersecting",
+];
+
 /// Asserts that ugcheck's report `r` of `out` has no finding in any of
 /// the categories `keys`.
 fn assert_none(r: &serde_json::Value, keys: &[&str], out: &str) {
@@ -644,18 +655,7 @@ fn the_kept_face_takes_a_twin_contour_that_names_more_corners() {
         ),
         "{out}"
     );
-    assert_none(
-        &r,
-        &[
-            "inconsistent",
-            "degenerate",
-            "nonplanar",
-            "tvertices",
-            "coincident",
-            "overlapping",
-        ],
-        &out,
-    );
+    assert_none(&r, DEFECTS, &out);
 }
 
 /// Coincident end pieces on records of their own about 2 epsilon apart,
@@ -677,17 +677,5 @@ fn the_kept_face_takes_a_twin_contour_its_neighbours_walk() {
         out.contains("f wing2.2.c3 (wing0.0.iv179 wing2.5.iv201 wing2.5.iv199 wing2.v0) wall;"),
         "{out}"
     );
-    assert_none(
-        &r,
-        &[
-            "inconsistent",
-            "degenerate",
-            "nonplanar",
-            "tvertices",
-            "coincident",
-            "overlapping",
-            "intersecting",
-        ],
-        &out,
-    );
+    assert_none(&r, DEFECTS, &out);
 }
