@@ -245,7 +245,7 @@ fn point_contact(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Option<Relation> {
             }
         }
     }
-    if points.is_empty() || pos == neg || coplanar(a, b, eps) {
+    if points.is_empty() || pos == neg {
         return None;
     }
     Some(
@@ -262,9 +262,23 @@ fn point_contact(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Option<Relation> {
 
 /// Classifies the pair (a, b) with distance tolerance `eps`.
 pub fn relate(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Relation {
-    if let Some(r) = point_contact(a, b, eps).or_else(|| point_contact(b, a, eps)) {
-        return r;
+    // (The point contact is asked only of pairs that would intersect: it
+    // reads every vertex of both faces, which the line's box test spares
+    // most pairs. And it holds only where the cutter finds nothing to cut
+    // either: at a shallow angle a corner within epsilon of the plane
+    // meets it along a stretch eps / sin θ long, which is cut.)
+    match relate_on_line(a, b, eps) {
+        Relation::Intersect => point_contact(a, b, eps)
+            .or_else(|| point_contact(b, a, eps))
+            .filter(|_| cut_segments(a, b, eps).is_empty())
+            .unwrap_or(Relation::Intersect),
+        r => r,
     }
+}
+
+/// [`relate`] by the line where the planes meet, point contacts taken as
+/// intersections.
+fn relate_on_line(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Relation {
     let (p0, dir, ts, near) = match line_of(a, b, eps) {
         LineCase::Coplanar => return Relation::Coplanar,
         LineCase::Disjoint => return Relation::Disjoint,
