@@ -348,28 +348,10 @@ fn take_twin_shapes(
     removed: &[bool],
     to: &std::collections::BTreeMap<u32, u32>,
 ) -> usize {
-    type Edge = (VertexId, VertexId);
-    let map = |v: VertexId| VertexId(to.get(&v.0).copied().unwrap_or(v.0));
-    let edges_of = |cs: &[Vec<VertexId>]| -> Vec<(Edge, bool)> {
-        cs.iter()
-            .flat_map(|c| {
-                (0..c.len()).filter_map(move |i| {
-                    let (a, b) = (c[i], c[(i + 1) % c.len()]);
-                    (a != b).then_some(((a.min(b), a.max(b)), a < b))
-                })
-            })
-            .collect()
-    };
-    let mut uses: FxHashMap<Edge, Vec<(FaceId, bool)>> = FxHashMap::default();
-    for f in out.top_faces() {
-        if removed[f.idx()] {
-            continue;
-        }
-        for (e, w) in edges_of(&out.faces[f.idx()].contours) {
-            uses.entry(e).or_default().push((f, w));
-        }
-    }
-    let bad = |u: Option<&Vec<(FaceId, bool)>>| matches!(u.map(|u| u.as_slice()), Some([x, y]) if x.1 == y.1);
+    let edges_of = |cs: &[Vec<VertexId>]| -> Vec<(Edge, bool)> { walked_edges(cs).collect() };
+    let mut uses = edge_uses(out, |f| !removed[f.idx()]);
+    let bad =
+        |u: Option<&Vec<(FaceId, bool)>>| u.is_some_and(|u| walked_twice_one_way(u, |_| true));
     let mut edges: Vec<Edge> = uses
         .iter()
         .filter(|(_, u)| bad(Some(u)))
@@ -392,14 +374,7 @@ fn take_twin_shapes(
             let shape: Vec<Vec<VertexId>> = m.faces[gone.idx()]
                 .contours
                 .iter()
-                .map(|c| {
-                    let mut c: Vec<VertexId> = c.iter().map(|&v| map(v)).collect();
-                    c.dedup();
-                    while c.len() > 1 && c.first() == c.last() {
-                        c.pop();
-                    }
-                    c
-                })
+                .map(|c| squeeze(c, to))
                 .collect();
             let new_edges = edges_of(&shape);
             if !new_edges.contains(&(e, !way))
@@ -447,6 +422,59 @@ fn take_twin_shapes(
         }
     }
     reshaped
+}
+
+/// Contour `c` with each record replaced as `to` says (record → the one it
+/// became), and the repeats that makes in a row dropped.
+fn squeeze(c: &[VertexId], to: &std::collections::BTreeMap<u32, u32>) -> Vec<VertexId> {
+    let mut out: Vec<VertexId> = c
+        .iter()
+        .map(|v| VertexId(to.get(&v.0).copied().unwrap_or(v.0)))
+        .collect();
+    out.dedup();
+    while out.len() > 1 && out.first() == out.last() {
+        out.pop();
+    }
+    out
+}
+
+/// An edge as a key: its records, the lower first.
+pub(crate) type Edge = (VertexId, VertexId);
+
+/// The edges contours walk (but those from a record to itself), each as
+/// its key and whether it is walked from the lower record.
+pub(crate) fn walked_edges(cs: &[Vec<VertexId>]) -> impl Iterator<Item = (Edge, bool)> + '_ {
+    cs.iter().flat_map(|c| {
+        (0..c.len()).filter_map(move |i| {
+            let (a, b) = (c[i], c[(i + 1) % c.len()]);
+            (a != b).then_some(((a.min(b), a.max(b)), a < b))
+        })
+    })
+}
+
+/// Per edge, the top-level faces `keep` accepts that walk it, and which
+/// way ([`walked_edges`]).
+pub(crate) fn edge_uses(
+    m: &Model,
+    keep: impl Fn(FaceId) -> bool,
+) -> FxHashMap<Edge, Vec<(FaceId, bool)>> {
+    let mut uses: FxHashMap<Edge, Vec<(FaceId, bool)>> = FxHashMap::default();
+    for f in m.top_faces().filter(|&f| keep(f)) {
+        for (e, w) in walked_edges(&m.faces[f.idx()].contours) {
+            uses.entry(e).or_default().push((f, w));
+        }
+    }
+    uses
+}
+
+/// Whether the uses of an edge by the faces `live` accepts are two that
+/// walk it the same way (an inconsistently oriented edge).
+pub(crate) fn walked_twice_one_way(uses: &[(FaceId, bool)], live: impl Fn(FaceId) -> bool) -> bool {
+    let mut left = uses.iter().filter(|(f, _)| live(*f));
+    match (left.next(), left.next(), left.next()) {
+        (Some(x), Some(y), None) => x.1 == y.1,
+        _ => false,
+    }
 }
 
 /// Whether contours `a` name every vertex record that contours `b` name,
@@ -704,14 +732,6 @@ fn snap_onto_removed(
     // (an edge shorter than the tolerance: a sliver beside the pair); one
     // that would come to pass a vertex twice elsewhere keeps its records,
     // until no such replacement is left.
-    let squeeze = |c: &[ug::VertexId], to: &BTreeMap<u32, u32>| -> Vec<u32> {
-        let mut out: Vec<u32> = c.iter().map(|v| resolve(to, v.0)).collect();
-        out.dedup();
-        while out.len() > 1 && out.first() == out.last() {
-            out.pop();
-        }
-        out
-    };
     loop {
         let mut veto: Vec<u32> = Vec::new();
         for (k, f) in m.faces.iter().enumerate() {
@@ -724,7 +744,7 @@ fn snap_onto_removed(
                     a.dedup();
                     a.len()
                 };
-                let after = squeeze(c, &to);
+                let after: Vec<u32> = squeeze(c, &to).into_iter().map(|v| v.0).collect();
                 let repeats_after = after.len() - distinct(after.clone());
                 let repeats_before = c.len() - distinct(c.iter().map(|v| v.0).collect());
                 if repeats_after > repeats_before {
@@ -769,11 +789,8 @@ fn snap_onto_removed(
         if removed.get(k).copied().unwrap_or(false) {
             continue;
         }
-        let mut contours: Vec<Vec<ug::VertexId>> = f
-            .contours
-            .iter()
-            .map(|c| squeeze(c, &to).into_iter().map(ug::VertexId).collect())
-            .collect();
+        let mut contours: Vec<Vec<ug::VertexId>> =
+            f.contours.iter().map(|c| squeeze(c, &to)).collect();
         // A sliver narrower than the tolerance may fall to a segment: it goes.
         if contours.first().is_none_or(|c| c.len() < 3) {
             removed[k] = true;

@@ -135,31 +135,11 @@ pub fn remove(m: &Model, eps: f64) -> (Model, Stats) {
 /// such edge elsewhere stays. Hidden faces cost only area and time; an
 /// inconsistent edge is a defect. Returns the faces kept.
 fn spare(m: &Model, sealed: &mut [bool]) -> usize {
-    use rustc_hash::FxHashMap;
-    // Per undirected edge, its uses: (face, walked from the lower id).
-    let mut uses: FxHashMap<(ug::VertexId, ug::VertexId), Vec<(FaceId, bool)>> =
-        FxHashMap::default();
-    for f in m.top_faces() {
-        for c in &m.faces[f.idx()].contours {
-            for i in 0..c.len() {
-                let (a, b) = (c[i], c[(i + 1) % c.len()]);
-                if a != b {
-                    uses.entry((a.min(b), a.max(b)))
-                        .or_default()
-                        .push((f, a < b));
-                }
-            }
-        }
-    }
+    use crate::coincident::{edge_uses, walked_edges, walked_twice_one_way};
+    let uses = edge_uses(m, |_| true);
     // Whether an edge's uses by kept faces are two walking it one way.
-    let bad = |u: &[(FaceId, bool)], sealed: &[bool]| {
-        let mut kept = u.iter().filter(|(f, _)| !sealed[f.idx()]);
-        match (kept.next(), kept.next(), kept.next()) {
-            (Some(x), Some(y), None) => x.1 == y.1,
-            _ => false,
-        }
-    };
-    let mut keys: Vec<(ug::VertexId, ug::VertexId)> = uses
+    let bad = |u: &[(FaceId, bool)], sealed: &[bool]| walked_twice_one_way(u, |f| !sealed[f.idx()]);
+    let mut keys: Vec<crate::coincident::Edge> = uses
         .iter()
         .filter(|(_, u)| u.iter().any(|(f, _)| sealed[f.idx()]) && bad(u, sealed))
         .map(|(&k, _)| k)
@@ -183,12 +163,8 @@ fn spare(m: &Model, sealed: &mut [bool]) -> usize {
         cands.sort_unstable();
         for f in cands {
             sealed[f.idx()] = false;
-            let harmless = m.faces[f.idx()].contours.iter().all(|c| {
-                (0..c.len()).all(|i| {
-                    let (a, b) = (c[i], c[(i + 1) % c.len()]);
-                    a == b || !bad(&uses[&(a.min(b), a.max(b))], sealed)
-                })
-            });
+            let harmless =
+                walked_edges(&m.faces[f.idx()].contours).all(|(e, _)| !bad(&uses[&e], sealed));
             if harmless {
                 spared += 1;
                 break;

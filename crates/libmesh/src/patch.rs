@@ -244,7 +244,7 @@ struct Divisions {
     start: Vec<u32>,
     ends: Vec<u32>,
     /// Per edge, the other edges of its faces that come within
-    /// [`THIN`]·eps of it without sharing an end (see [`thin_partners`]).
+    /// [`THIN`]·eps of it without sharing an end (see [`feet_and_thin`]).
     thin: FxHashMap<(VertexId, VertexId), Vec<(VertexId, VertexId)>>,
 }
 
@@ -350,6 +350,12 @@ impl FaceEdges {
     }
 }
 
+/// Per edge (lower vertex id first), the feet on it (parameters from its
+/// lower vertex).
+type Feet = FxHashMap<(VertexId, VertexId), Vec<f64>>;
+/// Per edge (lower vertex id first), its thin partners.
+type Thin = FxHashMap<(VertexId, VertexId), Vec<(VertexId, VertexId)>>;
+
 /// The feet of thin parts: for every face, each vertex that lies within
 /// [`THIN`]·`eps` (and more than `eps`) of one of the face's boundary edges,
 /// its foot on that edge if it falls more than 2·`eps` from the edge's ends.
@@ -360,42 +366,79 @@ impl FaceEdges {
 /// on one side of a 0.3 mm strip 2.8 m tall gave one 0.01 epsilon wide).
 /// With the feet, the strip is cut across into pieces as wide as it is.
 /// The feet divide the edge for every face that has it, so no T-vertex.
-fn feet(m: &Model, eps: f64) -> FxHashMap<(VertexId, VertexId), Vec<f64>> {
-    let mut out: FxHashMap<(VertexId, VertexId), Vec<f64>> = FxHashMap::default();
+///
+/// And the thin strips' partners: per edge of a face (lower vertex id
+/// first), the face's other edges that come within [`THIN`]·`eps` of it
+/// without sharing an end: the two sides of a strip a few epsilons wide.
+/// (Two segments of one plane that do not cross are nearest at an end of
+/// one of them, so it is enough to look from each vertex at the edges
+/// near it: the same look as the feet's, made once.) A division point on
+/// one side of such a strip would be joined only to points far along the
+/// other: a needle (property seed 13621, a wall's end 1.7 to 2.6 epsilon
+/// wide and 2.8 m tall whose one side was divided and the other, along a
+/// neighbour's edge, was not).
+fn feet_and_thin(m: &Model, eps: f64) -> (Feet, Thin) {
+    let (mut out, mut thin) = (Feet::default(), Thin::default());
     if eps.is_nan() || eps <= 0.0 {
-        return out;
+        return (out, thin);
     }
     let reach = THIN * eps;
+    let key = |a: VertexId, b: VertexId| if a < b { (a, b) } else { (b, a) };
     for f in m.top_faces() {
         let face = &m.faces[f.idx()];
         let fe = FaceEdges::new(m, face, reach);
         let edges = &fe.edges;
+        // The face's edges at each vertex, by vertex.
+        let mut at: Vec<(VertexId, (VertexId, VertexId))> = edges
+            .iter()
+            .flat_map(|&(a, b)| [(a, key(a, b)), (b, key(a, b))])
+            .collect();
+        at.sort_unstable();
+        at.dedup();
         let mut verts: Vec<VertexId> = face.contours.iter().flatten().copied().collect();
         verts.sort_unstable();
         verts.dedup();
         for &v in &verts {
             let x = m.pos(v);
+            let from = at.partition_point(|&(u, _)| u < v);
+            let mine = at[from..]
+                .iter()
+                .take_while(|&&(u, _)| u == v)
+                .map(|&(_, e)| e);
             for k in fe.near(x) {
                 let (a, b) = edges[k];
                 if a == v || b == v {
                     continue;
                 }
-                let key = if a < b { (a, b) } else { (b, a) };
-                let (p, q) = (m.pos(key.0), m.pos(key.1));
+                let g = key(a, b);
+                let (p, q) = (m.pos(g.0), m.pos(g.1));
                 // The foot's parameter, clamped: a foot at an end fails the test.
                 let (d, t) = geom::point_segment_distance(x, p, q);
+                if d > reach {
+                    continue;
+                }
+                for e in mine.clone() {
+                    if e.0 != g.0 && e.0 != g.1 && e.1 != g.0 && e.1 != g.1 {
+                        thin.entry(e).or_default().push(g);
+                        thin.entry(g).or_default().push(e);
+                    }
+                }
                 let l = (q - p).length();
                 if t * l <= 2.0 * eps || (1.0 - t) * l <= 2.0 * eps {
                     continue;
                 }
-                if d > eps && d <= reach {
-                    out.entry(key).or_default().push(t);
+                if d > eps {
+                    out.entry(g).or_default().push(t);
                 }
             }
         }
     }
+    for v in thin.values_mut() {
+        v.sort_unstable();
+        v.dedup();
+    }
     if out.is_empty() {
-        return out;
+        return (out, thin);
     }
     // A foot within eps of another edge (one nearly along its own, from a
     // shared end) would be a T-vertex there: it is left out.
@@ -442,52 +485,7 @@ fn feet(m: &Model, eps: f64) -> FxHashMap<(VertexId, VertexId), Vec<f64>> {
         }
     }
     out.retain(|_, ts| !ts.is_empty());
-    out
-}
-
-/// Per edge of a face (lower vertex id first), the face's other edges
-/// that come within [`THIN`]·`eps` of it without sharing an end: the two
-/// sides of a strip a few epsilons wide. (Two segments of one plane that
-/// do not cross are nearest at an end of one of them, so it is enough to
-/// look from each vertex at the edges near it.) A division point on one
-/// side of such a strip would be joined only to points far along the
-/// other: a needle (property seed 13621, a wall's end 1.7 to 2.6 epsilon
-/// wide and 2.8 m tall whose one side was divided and the other, along
-/// a neighbour's edge, was not).
-fn thin_partners(
-    m: &Model,
-    eps: f64,
-) -> FxHashMap<(VertexId, VertexId), Vec<(VertexId, VertexId)>> {
-    let mut out: FxHashMap<(VertexId, VertexId), Vec<(VertexId, VertexId)>> = FxHashMap::default();
-    if eps.is_nan() || eps <= 0.0 {
-        return out;
-    }
-    let reach = THIN * eps;
-    let key = |a: VertexId, b: VertexId| if a < b { (a, b) } else { (b, a) };
-    for f in m.top_faces() {
-        let fe = FaceEdges::new(m, &m.faces[f.idx()], reach);
-        let edges: Vec<(VertexId, VertexId)> = fe.edges.iter().map(|&(a, b)| key(a, b)).collect();
-        for (i, &e) in edges.iter().enumerate() {
-            for v in [e.0, e.1] {
-                let x = m.pos(v);
-                for k in fe.near(x) {
-                    let g = edges[k];
-                    if k == i || g.0 == e.0 || g.0 == e.1 || g.1 == e.0 || g.1 == e.1 {
-                        continue;
-                    }
-                    if geom::point_segment_distance(x, m.pos(g.0), m.pos(g.1)).0 <= reach {
-                        out.entry(e).or_default().push(g);
-                        out.entry(g).or_default().push(e);
-                    }
-                }
-            }
-        }
-    }
-    for v in out.values_mut() {
-        v.sort_unstable();
-        v.dedup();
-    }
-    out
+    (out, thin)
 }
 
 struct Ctx<'m> {
@@ -552,7 +550,7 @@ impl Ctx<'_> {
             // edge sharing an end with its own is left out (the feet
             // already are, in `feet`): such edges are not divided there.
             // Nor is one within THIN epsilons of another edge of its faces
-            // across a strip (see `thin_partners`).
+            // across a strip (see `feet_and_thin`).
             let reach = THIN * self.opts.eps;
             let thin = self.div.thin.get(&key);
             let clear_of_others = |t: f64| {
@@ -752,10 +750,11 @@ fn mesh_all(m: &Model, opts: Options, mut stats: Stats) -> Result<(Model, Stats,
             .collect(),
         div: {
             let (edges, start, ends) = edges_at_vertices(m);
+            let (feet, thin) = feet_and_thin(m, opts.eps);
             Divisions {
                 map: FxHashMap::default(),
-                feet: feet(m, opts.eps),
-                thin: thin_partners(m, opts.eps),
+                feet,
+                thin,
                 edges,
                 start,
                 ends,
