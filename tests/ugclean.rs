@@ -1,7 +1,7 @@
 //! ugclean end to end: one face of every coincident pair goes, the right one,
 //! and exactly the hidden area is removed.
 
-use ugkit::{fixture, run_ok};
+use ugkit::{assert_one_degenerate, fixture, run_ok};
 
 fn check(text: &str) -> serde_json::Value {
     serde_json::from_str(&run_ok("ugcheck", &["--json"], Some(text.as_bytes()))).unwrap()
@@ -496,15 +496,7 @@ fn a_tents_tip_joins_a_neighbour() {
         serde_json::from_str(&run_ok("ugcheck", &args, Some(text.as_bytes()))).unwrap()
     };
     let before = r(&src);
-    let degenerate = before["degenerate"].as_array().unwrap();
-    assert_eq!(degenerate.len(), 1, "{degenerate:?}");
-    assert!(
-        degenerate[0]["reason"]
-            .as_str()
-            .unwrap()
-            .contains("tent at slab2.1.iv33132"),
-        "{degenerate:?}"
-    );
+    assert_one_degenerate(&before, "tent at slab2.1.iv33132");
     let out = run_ok(
         "ugclean",
         &["--keep-enclosed", "-e", eps[1]],

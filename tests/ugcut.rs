@@ -1,7 +1,7 @@
 //! ugcut end to end: patches are triangles and convex quads, no T-vertex,
 //! area kept, rectangles from rectangles, edge lengths near LEN.
 
-use ugkit::{fixture, run, run_ok};
+use ugkit::{assert_one_degenerate, fixture, run, run_ok};
 
 fn check(text: &str) -> serde_json::Value {
     serde_json::from_str(&run_ok("ugcheck", &["--json"], Some(text.as_bytes()))).unwrap()
@@ -531,15 +531,7 @@ fn a_hole_along_the_outer_contour_is_not_covered() {
     let src = std::fs::read(fixture("cut/hole-along-the-outer-contour.ug")).unwrap();
     let eps = "1.08547e-4";
     let before = check_eps(&src, eps);
-    let degenerate = before["degenerate"].as_array().unwrap();
-    assert_eq!(degenerate.len(), 1, "{degenerate:?}");
-    assert!(
-        degenerate[0]["reason"]
-            .as_str()
-            .unwrap()
-            .contains("walk edge"),
-        "{degenerate:?}"
-    );
+    assert_one_degenerate(&before, "walk edge");
     for len in ["2", "0.5", "0.2"] {
         let out = run_ok("ugcut", &["-q", "-e", eps, "-l", len], Some(&src));
         let r = check_eps(out.as_bytes(), eps);

@@ -167,3 +167,14 @@ pub fn assert_golden(path: &str, actual: &str) {
         );
     }
 }
+
+/// Asserts that ugcheck's JSON report `r` names exactly one degenerate
+/// face, for a reason that contains `why`.
+pub fn assert_one_degenerate(r: &serde_json::Value, why: &str) {
+    let degenerate = r["degenerate"].as_array().expect("a degenerate list");
+    assert_eq!(degenerate.len(), 1, "{degenerate:?}");
+    assert!(
+        degenerate[0]["reason"].as_str().unwrap().contains(why),
+        "{degenerate:?}"
+    );
+}
