@@ -595,3 +595,46 @@ fn a_thin_strip_is_divided_on_neither_side() {
         1e-9,
     );
 }
+
+/// A pyramid's apex resting on a ceiling, 0.3 epsilon into it
+/// (fixtures/cut/cone-apex-on-a-ceiling.ug; property seed 9033, a globe's
+/// pole on a ceiling): a touch, nothing for ugisect to cut, and at -l 1
+/// and -l 2 a grid edge of the ceiling passed through the apex, a
+/// T-vertex. Now the apex is a corner of the ceiling's patches at every
+/// length, and the ceiling keeps its area.
+#[test]
+fn a_vertex_resting_inside_a_face_is_a_corner_of_its_patches() {
+    let eps = "1e-5";
+    let input = std::fs::read(fixture("cut/cone-apex-on-a-ceiling.ug")).unwrap();
+    for len in ["2", "1", "0.5", "0.3"] {
+        let out = run("ugcut", &["-v", "-e", eps, "-l", len], Some(&input));
+        assert!(out.status.success());
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert!(
+            err.contains("took 1 vertices resting inside faces as patch corners"),
+            "{err}"
+        );
+        let text = String::from_utf8(out.stdout).unwrap();
+        let r = check_eps(text.as_bytes(), eps);
+        assert_only_sound_patches(&r, len);
+        assert_eq!(count(&r, "intersecting"), 0, "-l {len}");
+        let ceiling: Vec<&str> = text
+            .lines()
+            .filter(|l| l.starts_with("f ") && l.ends_with(" ceiling;"))
+            .collect();
+        assert!(
+            ceiling
+                .iter()
+                .any(|l| l.split([' ', '(', ')']).any(|w| w == "apex")),
+            "-l {len}: no ceiling patch has the apex as a corner"
+        );
+        let area: f64 = r["area_by_material"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|m| m["material"] == "ceiling")
+            .map(|m| m["area"].as_f64().unwrap())
+            .unwrap();
+        assert!((area - 16.0).abs() <= 1e-9 * 16.0, "-l {len}: {area}");
+    }
+}

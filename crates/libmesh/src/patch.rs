@@ -100,6 +100,10 @@ pub struct Stats {
     /// Faces meshed by the plain triangulation because the grid and the
     /// refinement could not be fitted (triangles of poorer shape).
     pub plain: Vec<String>,
+    /// Vertices of other faces resting inside a face (within epsilon of
+    /// its plane, more than epsilon inside its contours), made corners of
+    /// its patches (see [`resting_points`]).
+    pub resting: usize,
 }
 
 /// The default patch length: 2% of the model's bounding-box diagonal.
@@ -497,6 +501,8 @@ struct Ctx<'m> {
     div: Divisions,
     /// Joins asked for by [`jog_points`]: (from, to), vertices of `m`.
     stuck: Vec<(VertexId, VertexId)>,
+    /// Vertices of other faces resting inside each face ([`resting_points`]).
+    resting: FxHashMap<FaceId, Vec<VertexId>>,
 }
 
 impl Ctx<'_> {
@@ -732,6 +738,143 @@ fn near_corner_joins(model: &Model, out: &Model, eps: f64) -> Joins {
     joins
 }
 
+/// For each face, the vertices of other faces resting inside it: within
+/// epsilon of its plane and inside its contours by more than epsilon, in
+/// the face's mesh frame. After `ugisect` only isolated point contacts are
+/// left so (a globe's pole on a ceiling, a cone's apex on a floor: a touch,
+/// nothing to cut); a patch edge of the face passing within epsilon of
+/// such a vertex would be a T-vertex (property seed 9033), so the mesher
+/// takes them as corners. Only isolated contacts count: a vertex with a
+/// neighbour within epsilon of the plane is left alone. Of vertices within
+/// epsilon of each other only the first is taken (they are one point to
+/// every check).
+fn resting_points(m: &Model, eps: f64) -> FxHashMap<FaceId, Vec<VertexId>> {
+    let mut out: FxHashMap<FaceId, Vec<VertexId>> = FxHashMap::default();
+    if eps.is_nan() || eps <= 0.0 {
+        return out;
+    }
+    let faces: Vec<FaceId> = m
+        .items
+        .iter()
+        .filter_map(|it| match it {
+            Item::Face(f) => Some(*f),
+            _ => None,
+        })
+        .collect();
+    let index = BoxIndex::new(faces.iter().enumerate().map(|(k, &f)| {
+        let (lo, hi) = bbox(
+            m.faces[f.idx()]
+                .contours
+                .iter()
+                .flatten()
+                .map(|&v| m.pos(v)),
+            eps,
+        );
+        (lo, hi, k as u32)
+    }));
+    let mut used: Vec<VertexId> = faces
+        .iter()
+        .flat_map(|&f| m.faces[f.idx()].contours.iter().flatten().copied())
+        .collect();
+    used.sort_unstable();
+    used.dedup();
+    // Each face's frame and contours in it, made when first asked for.
+    let mut projected: FxHashMap<u32, Option<(Frame, DVec3, Vec<Vec<DVec2>>)>> =
+        FxHashMap::default();
+    let e = DVec3::splat(eps);
+    let mut found: Vec<(VertexId, u32)> = Vec::new();
+    for v in used {
+        let p = m.pos(v);
+        for k in index.query(p - e, p + e) {
+            let face = &m.faces[faces[k as usize].idx()];
+            if face.contours.iter().flatten().any(|&w| w == v) {
+                continue;
+            }
+            let Some((frame, centre, c2)) = projected
+                .entry(k)
+                .or_insert_with(|| {
+                    let pts: Vec<Vec<DVec3>> = face
+                        .contours
+                        .iter()
+                        .map(|c| c.iter().map(|&w| m.pos(w)).collect())
+                        .collect();
+                    let frame = mesh_frame(&pts)?;
+                    let all: Vec<DVec3> = pts.iter().flatten().copied().collect();
+                    let centre = all.iter().copied().sum::<DVec3>() / all.len() as f64;
+                    let c2 = pts
+                        .iter()
+                        .map(|c| c.iter().map(|&q| frame.to_2d(q)).collect())
+                        .collect();
+                    Some((frame, centre, c2))
+                })
+                .as_ref()
+            else {
+                continue;
+            };
+            if (p - *centre).dot(frame.n).abs() > eps {
+                continue;
+            }
+            let q = frame.to_2d(p);
+            if geom::polygon::locate_2d(q, c2) != geom::polygon::Location::Inside {
+                continue;
+            }
+            let clear = c2.iter().all(|c| {
+                (0..c.len()).all(|i| {
+                    let (a, b) = (c[i], c[(i + 1) % c.len()]);
+                    let d = b - a;
+                    let t = ((q - a).dot(d) / d.length_squared().max(f64::MIN_POSITIVE))
+                        .clamp(0.0, 1.0);
+                    (a + d * t).distance(q) > eps
+                })
+            });
+            if !clear {
+                continue;
+            }
+            found.push((v, k));
+        }
+    }
+    if found.is_empty() {
+        return out;
+    }
+    // Only isolated contacts: a vertex with an edge lying in the face's
+    // plane (a box's corner standing on a floor) has that edge resting in
+    // the face too, an intersection that ugisect cuts; taking its corner
+    // alone would only change the mesh (the Cornell box's blocks on their
+    // floor, without ugisect).
+    let mut next: FxHashMap<VertexId, Vec<VertexId>> =
+        found.iter().map(|&(v, _)| (v, Vec::new())).collect();
+    for &f in &faces {
+        for c in &m.faces[f.idx()].contours {
+            for i in 0..c.len() {
+                let (a, b) = (c[i], c[(i + 1) % c.len()]);
+                if let Some(l) = next.get_mut(&a) {
+                    l.push(b);
+                }
+                if let Some(l) = next.get_mut(&b) {
+                    l.push(a);
+                }
+            }
+        }
+    }
+    for (v, k) in found {
+        let Some((frame, centre, _)) = &projected[&k] else {
+            continue;
+        };
+        if next[&v]
+            .iter()
+            .any(|&w| (m.pos(w) - *centre).dot(frame.n).abs() <= eps)
+        {
+            continue;
+        }
+        let p = m.pos(v);
+        let list = out.entry(faces[k as usize]).or_default();
+        if list.iter().all(|&w| m.pos(w).distance(p) > eps) {
+            list.push(v);
+        }
+    }
+    out
+}
+
 /// Vertex joins, (from, to).
 type Joins = Vec<(VertexId, VertexId)>;
 
@@ -761,7 +904,9 @@ fn mesh_all(m: &Model, opts: Options, mut stats: Stats) -> Result<(Model, Stats,
             }
         },
         stuck: Vec::new(),
+        resting: resting_points(m, opts.eps),
     };
+    stats.resting = cx.resting.values().map(Vec::len).sum();
     let mut out = Model {
         materials: m.materials.clone(),
         wires: m.wires.clone(),
@@ -963,11 +1108,19 @@ fn mesh_face(
         let (lo, hi) = (a.min(b), a.max(b));
         (lo.extend(0.0), hi.extend(0.0), k as u32)
     }));
-    let bpoints: Vec<(DVec2, VertexId)> = b2
+    let mut bpoints: Vec<(DVec2, VertexId)> = b2
         .iter()
         .zip(&bcontours)
         .flat_map(|(c2, c)| c2.iter().copied().zip(c.iter().copied()))
         .collect();
+    // Vertices of other faces resting inside this one become corners of
+    // its patches: any patch edge passing within epsilon of one would be a
+    // T-vertex. They count as boundary points for the grid (no cell around
+    // one; a cell corner within epsilon is one) and for the triangulation,
+    // but constrain nothing.
+    if let Some(rest) = cx.resting.get(&f) {
+        bpoints.extend(rest.iter().map(|&v| (frame.to_2d(cx.pos(v)), v)));
+    }
     let point_index = BoxIndex::new(
         bpoints
             .iter()
