@@ -779,8 +779,9 @@ fn resting_points(m: &Model, eps: f64) -> FxHashMap<FaceId, Vec<VertexId>> {
     used.sort_unstable();
     used.dedup();
     // Each face's frame and contours in it, made when first asked for.
-    let mut projected: FxHashMap<u32, Option<(Frame, DVec3, Vec<Vec<DVec2>>)>> =
-        FxHashMap::default();
+    // (frame, centre of its vertices, contours in the frame)
+    type Flat = (Frame, DVec3, Vec<Vec<DVec2>>);
+    let mut projected: FxHashMap<u32, Option<Flat>> = FxHashMap::default();
     let e = DVec3::splat(eps);
     let mut found: Vec<(VertexId, u32)> = Vec::new();
     for v in used {
