@@ -567,18 +567,21 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
 /// face), a cut of 4 `eps` along the line through the point stands for it.
 /// Empty for disjoint, touching or coplanar faces.
 pub fn cut_segments(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Vec<(DVec3, DVec3)> {
-    let (p0, dir, ts, at) = match line_of(a, b, eps) {
+    let (p0, dir, ts, at, near) = match line_of(a, b, eps) {
         LineCase::Line {
-            p0, dir, ts, at, ..
-        } => (p0, dir, ts, at),
+            p0,
+            dir,
+            ts,
+            at,
+            near,
+        } => (p0, dir, ts, at, near),
         _ => return Vec::new(),
     };
     // Stretches between boundary events, as indices into `ts`.
     let mut out: Vec<(usize, usize)> = Vec::new();
     // At least 14.5° between the planes (sin θ ≥ 1/4).
     let steep = a.plane.n.cross(b.plane.n).length_squared() >= 1.0 / 16.0;
-    let meets = |t: f64| {
-        let s = p0 + dir * t;
+    let meets_at = |s: DVec3| {
         let la = a.locate(s, eps);
         let lb = b.locate(s, eps);
         la != Location::Outside
@@ -603,23 +606,40 @@ pub fn cut_segments(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Vec<(DVec3, DVec3)>
         // moves by epsilon / sin θ when a face moves by epsilon, so which
         // end is inside is rounding (a rug on a tile, tilted apart by
         // jitter, cut again in every round: such overlaps are ugcopl's).
+        // The ends are tried where `relate` tries them (a vertex within
+        // epsilon of the other plane as itself, at a steep angle): a slab's
+        // side face perpendicular to it whose top edge zigzags 1.05
+        // epsilon either side of the slab's edge (tile corners welded to
+        // it or not), the corners just inside the slab, while the planes'
+        // line runs between, within epsilon of both edges (plain property
+        // seed 15361: an intersecting pair `relate` found and no cut).
         if la == Location::Boundary
             && lb == Location::Boundary
-            && !(steep && (meets(w[0]) || meets(w[1])))
+            && !(steep && (meets_at(near[k]) || meets_at(near[k + 1])))
         {
             continue;
         }
         match out.last_mut() {
-            Some(last) if last.1 == k => last.1 = k + 1,
+            Some(last) if last.1 == k && !(steep && near[k] != at[k]) => last.1 = k + 1,
             _ => out.push((k, k + 1)),
         }
     }
     // Where they meet at a point only (a corner resting inside a face):
     // a cut of 4 epsilon along the line through it, for the cutter to
     // extend until the point lies on an edge.
+    // At a steep angle a cut runs through the vertices within epsilon of
+    // the other plane themselves, one segment between each two, not along
+    // the planes' line past them: where a face is planar only within
+    // epsilon, its edge lying in the other face's plane zigzags up to
+    // about epsilon either side of the planes' line (plain property seed
+    // 15361, a slab's side face under a floor, its top edge through tile
+    // corners 1.05 epsilon apart across: the corners 1.05 epsilon inside
+    // the floor were left off a cut along the line). The edge itself is
+    // where the faces meet.
+    let end = |i: usize| if steep { near[i] } else { at[i] };
     let mut segs: Vec<(f64, DVec3, DVec3)> = out
         .into_iter()
-        .map(|(i, j)| (ts[i], at[i], at[j]))
+        .map(|(i, j)| (ts[i], end(i), end(j)))
         .collect();
     if POINT_CUTS {
         for (&t, &x) in ts.iter().zip(&at) {
@@ -629,7 +649,7 @@ pub fn cut_segments(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Vec<(DVec3, DVec3)>
             }) {
                 continue;
             }
-            if meets(t) {
+            if meets_at(p0 + dir * t) {
                 segs.push((t - 2.0 * eps, x - dir * (2.0 * eps), x + dir * (2.0 * eps)));
             }
         }
@@ -663,6 +683,42 @@ mod tests {
     fn wall_standing_inside_floor_intersects() {
         let wall = quad([[1., 1., 0.], [3., 1., 0.], [3., 1., 2.], [1., 1., 2.]]);
         assert_eq!(relate(&floor(), &wall, EPS), Relation::Intersect);
+    }
+
+    /// A slab's side face under a floor, its top edge lying in the floor's
+    /// plane and zigzagging 1.05 epsilon across the floor's edge (tile
+    /// corners welded to the edge or not; plain property seed 15361). The
+    /// corners off the edge lie inside the floor, so the pair intersects,
+    /// and the floor is cut through those corners themselves: the planes'
+    /// line runs between the zigzag's sides, within epsilon of both
+    /// faces' edges, and a cut along it (none, before) left the corners
+    /// 1.05 epsilon inside a piece.
+    #[test]
+    fn a_zigzag_edge_resting_in_a_face_is_cut_through_its_corners() {
+        let d = 1.05 * EPS;
+        let floor = quad([[2., 0., 0.], [4., 0., 0.], [4., 4., 0.], [2., 4., 0.]]);
+        let side = FaceGeom::new(vec![vec![
+            DVec3::new(2.0, 0.0, -0.2),
+            DVec3::new(2.0, 4.0, -0.2),
+            DVec3::new(2.0, 4.0, 0.0),
+            DVec3::new(2.0 + d, 3.0, 0.0),
+            DVec3::new(2.0 + d, 2.0, 0.0),
+            DVec3::new(2.0, 1.0, 0.0),
+            DVec3::new(2.0, 0.0, 0.0),
+        ]])
+        .unwrap();
+        assert_eq!(relate(&floor, &side, EPS), Relation::Intersect);
+        for (a, b) in [(&floor, &side), (&side, &floor)] {
+            let cuts = cut_segments(a, b, EPS);
+            for y in [3.0, 2.0] {
+                let p = DVec3::new(2.0 + d, y, 0.0);
+                assert!(
+                    cuts.iter()
+                        .any(|&(q, r)| q.distance(p) < 1e-3 * EPS || r.distance(p) < 1e-3 * EPS),
+                    "{cuts:?}"
+                );
+            }
+        }
     }
 
     /// A pyramid's apex resting inside a floor touches it: the faces meet
