@@ -56,7 +56,11 @@ fn config(seed: u64) -> Cad {
         curved: match std::env::var("UG_CURVED").as_deref() {
             Ok("1") => true,
             Ok("0") => false,
-            _ => (seed % 7 == 3 && !found(seed)) || FOUND_CURVED.contains(&seed),
+            _ => {
+                (seed % 7 == 3 && !found(seed))
+                    || FOUND_CURVED.contains(&seed)
+                    || FOUND_CURVED_WITH_STAIRS.contains(&seed)
+            }
         },
         stairs: match std::env::var("UG_STAIRS").as_deref() {
             Ok("1") => true,
@@ -64,6 +68,7 @@ fn config(seed: u64) -> Cad {
             _ => {
                 (seed.is_multiple_of(2) && !AS_FOUND.contains(&seed))
                     || FOUND_WITH_STAIRS.contains(&seed)
+                    || FOUND_CURVED_WITH_STAIRS.contains(&seed)
             }
         },
         ..cfg
@@ -79,9 +84,9 @@ fn found(s: u64) -> bool {
 /// Seeds that once failed, drawn as they were then (without the stairs
 /// and ramps added since): [`dirty_buildings_regression_seeds`] and the
 /// placed 1326. [`FOUND_WITH_STAIRS`] failed with stairs and ramps.
-const AS_FOUND: [u64; 21] = [
+const AS_FOUND: [u64; 22] = [
     228, 326, 367, 556, 573, 856, 1042, 1326, 1693, 5731, 10015, 10354, 11293, 11335, 11822, 11847,
-    11884, 13174, 13285, 13621, 13847,
+    11884, 13174, 13285, 13621, 13847, 15361,
 ];
 
 /// Seeds that once failed with stairs and ramps (found over 2000..2800):
@@ -111,6 +116,14 @@ const FOUND_LARGER: [u64; 2] = [8628, 8666];
 /// ugcut (fixtures/cut/cone-apex-on-a-ceiling.ug; the mesher now takes
 /// such resting vertices as patch corners).
 const FOUND_CURVED: [u64; 1] = [9033];
+
+/// Seeds that once failed with the curved things and stairs and ramps
+/// (drawn with both): 25191 (found over 25000..25200, 2 storeys), a ramp
+/// piece folded back under a floor slab at 3.3° along the edge they
+/// share, whose triangle on that edge had its apex 1.27 epsilon from it:
+/// an overlapping pair after ugcut (fixtures/cut/ramp-folded-under-a-slab.ug;
+/// the mesher now puts a point far enough across such an edge).
+const FOUND_CURVED_WITH_STAIRS: [u64; 1] = [25191];
 
 fn size(seed: u64) -> Cad {
     if FOUND_LARGER.contains(&seed) {
@@ -405,7 +418,13 @@ fn dirty_buildings_seeds_150_to_199() {
 ///   about 2 epsilon apart that sharing could not join
 ///   (fixtures/clean/end-piece-on-records-of-its-own.ug; the kept piece
 ///   now takes the removed one's contour where that leaves fewer such
-///   edges).
+///   edges);
+/// * 15361 (found over 15000..15400, plain, a wing and a roof): 3
+///   intersecting pairs after the chain, a wing slab's side face under a
+///   floor slab whose top edge zigzags through tile corners 1.05 epsilon
+///   either side of the floor's edge; the floor was cut along the planes'
+///   line, leaving the corners inside it (`cut_segments` now cuts at a
+///   steep angle through such vertices themselves).
 #[test]
 fn dirty_buildings_regression_seeds() {
     run(AS_FOUND
@@ -413,6 +432,7 @@ fn dirty_buildings_regression_seeds() {
         .chain(&FOUND_WITH_STAIRS)
         .chain(&FOUND_LARGER)
         .chain(&FOUND_CURVED)
+        .chain(&FOUND_CURVED_WITH_STAIRS)
         .copied()
         .filter(|&s| s != 1326)
         .collect());

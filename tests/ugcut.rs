@@ -638,3 +638,56 @@ fn a_vertex_resting_inside_a_face_is_a_corner_of_its_patches() {
         assert!((area - 16.0).abs() <= 1e-9 * 16.0, "-l {len}: {area}");
     }
 }
+
+/// A ramp piece folded back under a floor slab at 3.3° along the edge
+/// they share (fixtures/cut/ramp-folded-under-a-slab.ug, property seed
+/// 25191): a corner of the ramp 1.27 epsilon under that edge was the apex
+/// of a triangle 1 m long on it, all within 2 epsilon of the slab's plane,
+/// so it overlapped (or coincided with) the slab's patch across. Now a
+/// point straight across the edge, far enough for the angle, is its apex.
+/// (The two walk the edge the same way, as in the whole model: those
+/// inconsistent edges are the fixture's, not ugcut's.)
+#[test]
+fn a_patch_on_a_shallow_fold_reaches_off_the_other_face() {
+    let eps = "9.590954316779447e-6";
+    let input = std::fs::read(fixture("cut/ramp-folded-under-a-slab.ug")).unwrap();
+    let before = check_eps(&input, eps);
+    for len in ["0.7", "0.3", "1", "2"] {
+        let out = run("ugcut", &["-e", eps, "-l", len], Some(&input));
+        assert!(out.status.success());
+        let r = check_eps(&out.stdout, eps);
+        for key in [
+            "nonpatch",
+            "tvertices",
+            "degenerate",
+            "overlapping",
+            "coincident",
+            "intersecting",
+        ] {
+            assert_eq!(count(&r, key), 0, "-l {len}: {key}: {}", r[key]);
+        }
+        // The ramp piece is planar only within epsilon, so its area
+        // depends on the triangulation by about 1e-8 (without the fold's
+        // point too).
+        for (x, y) in areas(&before).iter().zip(areas(&r)) {
+            assert!((x - y).abs() <= 1e-7 * x, "-l {len}: area {x} → {y}");
+        }
+    }
+}
+
+/// A globe's cap piece hanging from a ceiling at 22° beside a light
+/// panel's edge that leaves the cap's top corner
+/// (fixtures/cut/globe-cap-under-a-panel-edge.ug, property seed 23003):
+/// a division point (a foot) on the panel's edge 2.08 epsilon from that
+/// corner lay 0.8 epsilon from the cap and inside it, a T-vertex on the
+/// cap's patches and two overlapping pairs at every length. Now a division
+/// point resting inside a face that does not have its edge is left out.
+#[test]
+fn a_division_point_resting_inside_another_face_is_left_out() {
+    cuts_cleanly(
+        "cut/globe-cap-under-a-panel-edge.ug",
+        "2.4413364723964566e-5",
+        &["0.7", "0.3", "1", "2"],
+        1e-9,
+    );
+}

@@ -503,6 +503,11 @@ struct Ctx<'m> {
     stuck: Vec<(VertexId, VertexId)>,
     /// Vertices of other faces resting inside each face ([`resting_points`]).
     resting: FxHashMap<FaceId, Vec<VertexId>>,
+    /// The faces, for asking whether a division point rests inside one.
+    planes: FacePlanes,
+    /// Every face's contour edges, (lower vertex, higher, face), sorted:
+    /// the faces across an edge, for [`fold_points`].
+    edge_faces: Vec<(VertexId, VertexId, FaceId)>,
 }
 
 impl Ctx<'_> {
@@ -584,6 +589,32 @@ impl Ctx<'_> {
                 .chain(feet.iter().map(|&t| (t, true)))
                 .collect();
             ts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            // Nor a point resting inside a face that does not have the edge
+            // (within epsilon of its plane, more than epsilon inside) while
+            // the edge leaves that plane: a patch edge of that face would
+            // pass within epsilon of it. (A
+            // globe's cap piece hanging from the ceiling at 22°, a light
+            // panel's edge leaving the cap's top corner: a foot 2.08
+            // epsilon along the panel's edge was 0.8 epsilon from the cap,
+            // a T-vertex; property seed 23003 on 3 × 2 rooms.)
+            let m = self.m;
+            let eps = self.opts.eps;
+            // An edge lying in the face's plane (a box's bottom edge
+            // standing on a floor, without ugisect) rests in it all along,
+            // an intersection: its points are kept.
+            ts.retain(|&(t, _)| {
+                let rest = self.planes.resting(m, p + (q - p) * t, eps, |face| {
+                    let mut has = [false; 2];
+                    for &w in face.contours.iter().flatten() {
+                        has[0] |= w == key.0;
+                        has[1] |= w == key.1;
+                    }
+                    has[0] && has[1]
+                });
+                rest.iter().all(|&k| {
+                    self.planes.near_plane(k, p, eps) && self.planes.near_plane(k, q, eps)
+                })
+            });
             let pts: Vec<VertexId> = ts
                 .iter()
                 .enumerate()
@@ -738,60 +769,61 @@ fn near_corner_joins(model: &Model, out: &Model, eps: f64) -> Joins {
     joins
 }
 
-/// For each face, the vertices of other faces resting inside it: within
-/// epsilon of its plane and inside its contours by more than epsilon, in
-/// the face's mesh frame. After `ugisect` only isolated point contacts are
-/// left so (a globe's pole on a ceiling, a cone's apex on a floor: a touch,
-/// nothing to cut); a patch edge of the face passing within epsilon of
-/// such a vertex would be a T-vertex (property seed 9033), so the mesher
-/// takes them as corners. Only isolated contacts count: a vertex with a
-/// neighbour within epsilon of the plane is left alone. Of vertices within
-/// epsilon of each other only the first is taken (they are one point to
-/// every check).
-fn resting_points(m: &Model, eps: f64) -> FxHashMap<FaceId, Vec<VertexId>> {
-    let mut out: FxHashMap<FaceId, Vec<VertexId>> = FxHashMap::default();
-    if eps.is_nan() || eps <= 0.0 {
-        return out;
+/// The model's top-level faces for point queries: a box index, and each
+/// face's mesh frame, the centre of its vertices and its contours in the
+/// frame, made when first asked for.
+struct FacePlanes {
+    faces: Vec<FaceId>,
+    index: BoxIndex,
+    flat: FxHashMap<u32, Option<Flat>>,
+}
+
+/// (frame, centre of the face's vertices, contours in the frame)
+type Flat = (Frame, DVec3, Vec<Vec<DVec2>>);
+
+impl FacePlanes {
+    fn new(m: &Model, eps: f64) -> FacePlanes {
+        let faces: Vec<FaceId> = m.top_faces().collect();
+        let index = BoxIndex::new(faces.iter().enumerate().map(|(k, &f)| {
+            let (lo, hi) = bbox(
+                m.faces[f.idx()]
+                    .contours
+                    .iter()
+                    .flatten()
+                    .map(|&v| m.pos(v)),
+                eps,
+            );
+            (lo, hi, k as u32)
+        }));
+        FacePlanes {
+            faces,
+            index,
+            flat: FxHashMap::default(),
+        }
     }
-    let faces: Vec<FaceId> = m
-        .items
-        .iter()
-        .filter_map(|it| match it {
-            Item::Face(f) => Some(*f),
-            _ => None,
-        })
-        .collect();
-    let index = BoxIndex::new(faces.iter().enumerate().map(|(k, &f)| {
-        let (lo, hi) = bbox(
-            m.faces[f.idx()]
-                .contours
-                .iter()
-                .flatten()
-                .map(|&v| m.pos(v)),
-            eps,
-        );
-        (lo, hi, k as u32)
-    }));
-    let mut used: Vec<VertexId> = faces
-        .iter()
-        .flat_map(|&f| m.faces[f.idx()].contours.iter().flatten().copied())
-        .collect();
-    used.sort_unstable();
-    used.dedup();
-    // Each face's frame and contours in it, made when first asked for.
-    // (frame, centre of its vertices, contours in the frame)
-    type Flat = (Frame, DVec3, Vec<Vec<DVec2>>);
-    let mut projected: FxHashMap<u32, Option<Flat>> = FxHashMap::default();
-    let e = DVec3::splat(eps);
-    let mut found: Vec<(VertexId, u32)> = Vec::new();
-    for v in used {
-        let p = m.pos(v);
-        for k in index.query(p - e, p + e) {
-            let face = &m.faces[faces[k as usize].idx()];
-            if face.contours.iter().flatten().any(|&w| w == v) {
+
+    /// Whether `p` lies within `eps` of the plane of face `k` (an index
+    /// into `faces` that [`FacePlanes::resting`] has given).
+    fn near_plane(&self, k: u32, p: DVec3, eps: f64) -> bool {
+        match self.flat.get(&k) {
+            Some(Some((frame, centre, _))) => (p - *centre).dot(frame.n).abs() <= eps,
+            _ => false,
+        }
+    }
+
+    /// The faces (indices into `faces`) that `p` rests inside: within
+    /// `eps` of the plane, inside the contours by more than `eps`; faces
+    /// for which `skip` holds are not tried.
+    fn resting(&mut self, m: &Model, p: DVec3, eps: f64, skip: impl Fn(&Face) -> bool) -> Vec<u32> {
+        let e = DVec3::splat(eps);
+        let mut out = Vec::new();
+        for k in self.index.query(p - e, p + e) {
+            let face = &m.faces[self.faces[k as usize].idx()];
+            if skip(face) {
                 continue;
             }
-            let Some((frame, centre, c2)) = projected
+            let Some((frame, centre, c2)) = self
+                .flat
                 .entry(k)
                 .or_insert_with(|| {
                     let pts: Vec<Vec<DVec3>> = face
@@ -828,9 +860,45 @@ fn resting_points(m: &Model, eps: f64) -> FxHashMap<FaceId, Vec<VertexId>> {
                     (a + d * t).distance(q) > eps
                 })
             });
-            if !clear {
-                continue;
+            if clear {
+                out.push(k);
             }
+        }
+        out
+    }
+}
+
+/// For each face, the vertices of other faces resting inside it: within
+/// epsilon of its plane and inside its contours by more than epsilon, in
+/// the face's mesh frame. After `ugisect` only isolated point contacts are
+/// left so (a globe's pole on a ceiling, a cone's apex on a floor: a touch,
+/// nothing to cut); a patch edge of the face passing within epsilon of
+/// such a vertex would be a T-vertex (property seed 9033), so the mesher
+/// takes them as corners. Only isolated contacts count: a vertex with a
+/// neighbour within epsilon of the plane is left alone. Of vertices within
+/// epsilon of each other only the first is taken (they are one point to
+/// every check).
+fn resting_points(
+    planes: &mut FacePlanes,
+    m: &Model,
+    eps: f64,
+) -> FxHashMap<FaceId, Vec<VertexId>> {
+    let mut out: FxHashMap<FaceId, Vec<VertexId>> = FxHashMap::default();
+    if eps.is_nan() || eps <= 0.0 {
+        return out;
+    }
+    let mut used: Vec<VertexId> = planes
+        .faces
+        .iter()
+        .flat_map(|&f| m.faces[f.idx()].contours.iter().flatten().copied())
+        .collect();
+    used.sort_unstable();
+    used.dedup();
+    let mut found: Vec<(VertexId, u32)> = Vec::new();
+    for v in used {
+        for k in planes.resting(m, m.pos(v), eps, |face| {
+            face.contours.iter().flatten().any(|&w| w == v)
+        }) {
             found.push((v, k));
         }
     }
@@ -844,7 +912,7 @@ fn resting_points(m: &Model, eps: f64) -> FxHashMap<FaceId, Vec<VertexId>> {
     // floor, without ugisect).
     let mut next: FxHashMap<VertexId, Vec<VertexId>> =
         found.iter().map(|&(v, _)| (v, Vec::new())).collect();
-    for &f in &faces {
+    for &f in &planes.faces {
         for c in &m.faces[f.idx()].contours {
             for i in 0..c.len() {
                 let (a, b) = (c[i], c[(i + 1) % c.len()]);
@@ -858,7 +926,7 @@ fn resting_points(m: &Model, eps: f64) -> FxHashMap<FaceId, Vec<VertexId>> {
         }
     }
     for (v, k) in found {
-        let Some((frame, centre, _)) = &projected[&k] else {
+        let Some((frame, centre, _)) = &planes.flat[&k] else {
             continue;
         };
         if next[&v]
@@ -868,7 +936,7 @@ fn resting_points(m: &Model, eps: f64) -> FxHashMap<FaceId, Vec<VertexId>> {
             continue;
         }
         let p = m.pos(v);
-        let list = out.entry(faces[k as usize]).or_default();
+        let list = out.entry(planes.faces[k as usize]).or_default();
         if list.iter().all(|&w| m.pos(w).distance(p) > eps) {
             list.push(v);
         }
@@ -881,6 +949,8 @@ type Joins = Vec<(VertexId, VertexId)>;
 
 /// The meshing of a prepared model; also the joins [`jog_points`] asked for.
 fn mesh_all(m: &Model, opts: Options, mut stats: Stats) -> Result<(Model, Stats, Joins), String> {
+    let mut planes = FacePlanes::new(m, opts.eps);
+    let resting = resting_points(&mut planes, m, opts.eps);
     let mut cx = Ctx {
         m,
         opts,
@@ -905,7 +975,24 @@ fn mesh_all(m: &Model, opts: Options, mut stats: Stats) -> Result<(Model, Stats,
             }
         },
         stuck: Vec::new(),
-        resting: resting_points(m, opts.eps),
+        resting,
+        planes,
+        edge_faces: {
+            let mut e: Vec<(VertexId, VertexId, FaceId)> = m
+                .top_faces()
+                .flat_map(|f| {
+                    m.faces[f.idx()].contours.iter().flat_map(move |c| {
+                        (0..c.len()).map(move |i| {
+                            let (a, b) = (c[i], c[(i + 1) % c.len()]);
+                            (a.min(b), a.max(b), f)
+                        })
+                    })
+                })
+                .collect();
+            e.sort_unstable();
+            e.dedup();
+            e
+        },
     };
     stats.resting = cx.resting.values().map(Vec::len).sum();
     let mut out = Model {
@@ -1090,10 +1177,18 @@ fn mesh_face(
 
     // 1. Boundary: contours with division points.
     let mut bcontours: Vec<Vec<VertexId>> = Vec::new();
+    // Each boundary segment's contour edge (both sorted).
+    let mut borig: FxHashMap<(VertexId, VertexId), (VertexId, VertexId)> = FxHashMap::default();
     for c in &face.contours {
         let mut bc = Vec::new();
         for i in 0..c.len() {
-            bc.extend(cx.divided(c[i], c[(i + 1) % c.len()]));
+            let (a, b) = (c[i], c[(i + 1) % c.len()]);
+            let from = bc.len();
+            bc.extend(cx.divided(a, b));
+            for k in from..bc.len() {
+                let (u, v) = (bc[k], if k + 1 < bc.len() { bc[k + 1] } else { b });
+                borig.insert((u.min(v), u.max(v)), (a.min(b), a.max(b)));
+            }
         }
         bcontours.push(bc);
     }
@@ -1384,8 +1479,15 @@ fn mesh_face(
         let steiner = remove_slivers(&mut tris, &fixed, &at, eps);
         if !jogs_done {
             jogs_done = true;
-            let (jogs, stuck) =
+            let (mut jogs, stuck) =
                 jog_points(&tris, &steiner, &at, &bcontours, &segs, &seg_index, eps);
+            for q in fold_points(
+                cx, f, frame, &tris, &steiner, &at, &borig, &segs, &seg_index,
+            ) {
+                if jogs.iter().all(|o| o.distance(q) > 2.0 * eps) {
+                    jogs.push(q);
+                }
+            }
             let known = cx.m.vertices.len();
             cx.stuck.extend(
                 stuck
@@ -1847,6 +1949,211 @@ fn jog_points(
         }
     }
     (out, stuck)
+}
+
+/// Below this angle between two faces folded onto each other along an
+/// edge, [`fold_points`] treats the fold as this one.
+const FOLD_MIN_DEG: f64 = 1.0;
+
+/// Points that keep a face's patches along a fold from lying on the other
+/// face's: where the face meets another along a contour edge at a small
+/// angle θ, folded back onto it (a ramp running under a floor slab at
+/// 3.3°, the two sharing the edge where it comes up through the floor),
+/// a patch on that edge whose apex lies less than 3 epsilon / sin θ from
+/// it has every corner within 2 epsilon of the other face's plane: it is
+/// coplanar with the patch across, and overlaps it (property seed 25191
+/// with stairs and curved things: a ramp piece's corner 1.27 epsilon
+/// under its top edge, the apex of a triangle 1 m long, one overlapping
+/// pair after ugcut). For each such triangle, the best point straight
+/// across the edge at 6 epsilon / sin θ (and some farther), inside the
+/// face and clear of its boundary, becomes its apex. Only folds under 30°
+/// count: `ugcheck` takes faces more than about 26° apart as crossing, not
+/// coplanar, however close. Faces on the same
+/// vertices (twins, which get the same patches) do not count.
+#[allow(clippy::too_many_arguments)]
+fn fold_points(
+    cx: &Ctx<'_>,
+    f: FaceId,
+    frame: Frame,
+    tris: &[[VertexId; 3]],
+    steiner: &[DVec2],
+    at: &dyn Fn(VertexId) -> DVec2,
+    borig: &FxHashMap<(VertexId, VertexId), (VertexId, VertexId)>,
+    segs: &[(DVec2, DVec2)],
+    seg_index: &BoxIndex,
+) -> Vec<DVec2> {
+    let eps = cx.opts.eps;
+    let mut out: Vec<DVec2> = Vec::new();
+    if eps.is_nan() || eps <= 0.0 {
+        return out;
+    }
+    let m = cx.m;
+    let pos = |v: VertexId| {
+        if v.0 > u32::MAX - 1_000_000 && ((u32::MAX - v.0) as usize) < steiner.len() {
+            steiner[(u32::MAX - v.0) as usize]
+        } else {
+            at(v)
+        }
+    };
+    let min_sin = FOLD_MIN_DEG.to_radians().sin();
+    let reach = 3.0 * eps / min_sin;
+    let mut key: Option<Vec<VertexId>> = None;
+    let to3 = |w: DVec2| frame.u * w.x + frame.v * w.y;
+    for t in tris {
+        let p = t.map(pos);
+        for i in 0..3 {
+            let (a, b) = (t[i], t[(i + 1) % 3]);
+            let Some(&(oa, ob)) = borig.get(&(a.min(b), a.max(b))) else {
+                continue;
+            };
+            let (pa, pb, po) = (p[i], p[(i + 1) % 3], p[(i + 2) % 3]);
+            let l = (pb - pa).length();
+            if l <= 0.0 {
+                continue;
+            }
+            let h = (pb - pa).perp_dot(po - pa).abs() / l;
+            if h >= reach {
+                continue;
+            }
+            // The face's inward direction at the edge, and the other faces'.
+            let d2 = (pb - pa) / l;
+            let mut n = d2.perp();
+            if n.dot(po - pa) < 0.0 {
+                n = -n;
+            }
+            let inward = to3(n).normalize_or_zero();
+            let dir = (m.pos(ob) - m.pos(oa)).normalize_or_zero();
+            let lo = cx.edge_faces.partition_point(|e| (e.0, e.1) < (oa, ob));
+            let mut sin_fold: Option<f64> = None;
+            for &(_, _, g) in cx.edge_faces[lo..]
+                .iter()
+                .take_while(|e| (e.0, e.1) == (oa, ob))
+            {
+                if g == f {
+                    continue;
+                }
+                let gface = &m.faces[g.idx()];
+                let pts: Vec<Vec<DVec3>> = gface
+                    .contours
+                    .iter()
+                    .map(|c| c.iter().map(|&v| m.pos(v)).collect())
+                    .collect();
+                let Some(gn) = geom::face_normal(&pts) else {
+                    continue;
+                };
+                // Where g walks the edge, and on which side its inside is:
+                // left of the walk for an outer contour walked
+                // counter-clockwise about its normal or a hole walked
+                // clockwise.
+                let Some((ci, forward)) = gface.contours.iter().enumerate().find_map(|(ci, c)| {
+                    (0..c.len()).find_map(|k| {
+                        let (x, y) = (c[k], c[(k + 1) % c.len()]);
+                        if (x, y) == (oa, ob) {
+                            Some((ci, true))
+                        } else if (x, y) == (ob, oa) {
+                            Some((ci, false))
+                        } else {
+                            None
+                        }
+                    })
+                }) else {
+                    continue;
+                };
+                let gframe = Frame::new(DVec3::ZERO, gn);
+                let c2: Vec<DVec2> = pts[ci].iter().map(|&q| gframe.to_2d(q)).collect();
+                let area = geom::signed_area_2d(&c2);
+                if area == 0.0 {
+                    continue;
+                }
+                let walk = if forward { dir } else { -dir };
+                let mut gin = gn.normalize().cross(walk);
+                if (ci == 0) != (area > 0.0) {
+                    gin = -gin;
+                }
+                // Folded back by under 30° (the overlap test takes faces
+                // within about 26° of parallel as coplanar).
+                if gin.dot(inward) <= 0.0 {
+                    continue;
+                }
+                let s = gin.cross(inward).length().max(min_sin);
+                if s >= 0.5 {
+                    continue;
+                }
+                if h * s >= 3.0 * eps {
+                    continue;
+                }
+                let own = key.get_or_insert_with(|| {
+                    let mut k: Vec<VertexId> = m.faces[f.idx()]
+                        .contours
+                        .iter()
+                        .flatten()
+                        .copied()
+                        .collect();
+                    k.sort_unstable();
+                    k.dedup();
+                    k
+                });
+                let mut gk: Vec<VertexId> = gface.contours.iter().flatten().copied().collect();
+                gk.sort_unstable();
+                gk.dedup();
+                if gk == *own {
+                    continue;
+                }
+                sin_fold = Some(sin_fold.map_or(s, |x: f64| x.min(s)));
+            }
+            let Some(s) = sin_fold else {
+                continue;
+            };
+            if h * s >= 3.0 * eps {
+                continue;
+            }
+            let target = 6.0 * eps / s;
+            let clearance = |q: DVec2| {
+                let r = target.max(64.0 * eps);
+                seg_index
+                    .query(
+                        (q - DVec2::splat(r)).extend(0.0),
+                        (q + DVec2::splat(r)).extend(0.0),
+                    )
+                    .into_iter()
+                    .map(|k| segs[k as usize])
+                    .map(|(s0, s1)| {
+                        geom::point_segment_distance(q.extend(0.0), s0.extend(0.0), s1.extend(0.0))
+                            .0
+                    })
+                    .fold(r, f64::min)
+            };
+            let inside = |q: DVec2| {
+                segs.iter()
+                    .filter(|(s0, s1)| {
+                        (s0.y > q.y) != (s1.y > q.y)
+                            && q.x < s0.x + (q.y - s0.y) * (s1.x - s0.x) / (s1.y - s0.y)
+                    })
+                    .count()
+                    % 2
+                    == 1
+            };
+            let breaks = |q: DVec2| geom::incircle(pa, pb, po, q) > 0;
+            let mut best: Option<(bool, f64, DVec2)> = None;
+            for along in [0.5, 0.35, 0.65, 0.2, 0.8] {
+                for k in [1.0, 1.5, 2.0, 3.0] {
+                    let q = pa + (pb - pa) * along + n * (k * target);
+                    let score = width([pa, pb, q], eps).min(clearance(q));
+                    let b = breaks(q) && score > eps;
+                    if best.is_none_or(|(bb, sc, _)| (b, score) > (bb, sc)) && inside(q) {
+                        best = Some((b, score, q));
+                    }
+                }
+            }
+            if let Some((_, score, q)) = best
+                && score > eps
+                && out.iter().all(|o| o.distance(q) > 2.0 * eps)
+            {
+                out.push(q);
+            }
+        }
+    }
+    out
 }
 
 /// Boundary edges shorter than this many epsilons whose needle no point
