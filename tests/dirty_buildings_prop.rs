@@ -108,14 +108,19 @@ const FOUND_WITH_STAIRS: [u64; 4] = [2012, 2615, 2664, 3327];
 /// foot on the planes' line inside the ramp (an intersecting pair that
 /// ugisect did not cut); 8628, a T-vertex after ugcopl on the base of a
 /// wall's sliver 1.8 epsilon wide, which the welder took as without area.
-const FOUND_LARGER: [u64; 2] = [8628, 8666];
+const FOUND_LARGER: [u64; 3] = [8627, 8628, 8666];
 
 /// Seeds that once failed with the curved things (drawn with them):
 /// 9033, a globe's pole resting on a ceiling piece (a touch, nothing to
 /// cut) that a patch edge of the ceiling passed through: a T-vertex after
 /// ugcut (fixtures/cut/cone-apex-on-a-ceiling.ug; the mesher now takes
 /// such resting vertices as patch corners).
-const FOUND_CURVED: [u64; 1] = [9033];
+/// 27265 (found over 27000..27300, a wing and a roof): an intersecting
+/// pair after the chain once ugisect cut through the vertices on the
+/// other plane at steep angles: a roof piece at 20° sharing a slab's eave
+/// edge, the planes' line 1.08 epsilon inside both (the middle of a
+/// stretch between vertices is now taken between them).
+const FOUND_CURVED: [u64; 2] = [9033, 27265];
 
 /// Seeds that once failed with the curved things and stairs and ramps
 /// (drawn with both): 25191 (found over 25000..25200, 2 storeys), a ramp
@@ -123,7 +128,12 @@ const FOUND_CURVED: [u64; 1] = [9033];
 /// share, whose triangle on that edge had its apex 1.27 epsilon from it:
 /// an overlapping pair after ugcut (fixtures/cut/ramp-folded-under-a-slab.ug;
 /// the mesher now puts a point far enough across such an edge).
-const FOUND_CURVED_WITH_STAIRS: [u64; 1] = [25191];
+/// 8627 (3 × 2 rooms on 2 storeys, a triangle export, also in
+/// [`FOUND_LARGER`]): 4 intersecting pairs after the chain, a pipe's
+/// facet through a pier and the lintel beside it at 11°, whose crossing
+/// of their shared edge two pairs found 1.05 epsilon apart (an end of a
+/// cut segment now reuses a vertex within 2 epsilon on both planes).
+const FOUND_CURVED_WITH_STAIRS: [u64; 2] = [25191, 8627];
 
 fn size(seed: u64) -> Cad {
     if FOUND_LARGER.contains(&seed) {
@@ -427,7 +437,7 @@ fn dirty_buildings_seeds_150_to_199() {
 ///   steep angle through such vertices themselves).
 #[test]
 fn dirty_buildings_regression_seeds() {
-    run(AS_FOUND
+    let mut seeds: Vec<u64> = AS_FOUND
         .iter()
         .chain(&FOUND_WITH_STAIRS)
         .chain(&FOUND_LARGER)
@@ -435,7 +445,10 @@ fn dirty_buildings_regression_seeds() {
         .chain(&FOUND_CURVED_WITH_STAIRS)
         .copied()
         .filter(|&s| s != 1326)
-        .collect());
+        .collect();
+    seeds.sort_unstable();
+    seeds.dedup();
+    run(seeds);
 }
 
 /// Buildings as CAD exports place them on a site ([`place`]): turned by

@@ -129,9 +129,19 @@ pub(crate) fn isect_once(
             .name
             .clone()
             .unwrap_or_else(|| format!("f{}", i + 1));
+        let planes: Vec<&geom::Plane> = [i, j]
+            .iter()
+            .filter_map(|&k| geoms[k].as_ref().map(|g| &g.plane))
+            .collect();
         for &(p, q) in segs {
-            let a = rb.vertex(p, &base, "i");
-            let b = rb.vertex(q, &base, "i");
+            // (A short segment's ends are found within epsilon only.)
+            let wide: &[&geom::Plane] = if p.distance(q) > 4.0 * eps {
+                &planes
+            } else {
+                &[]
+            };
+            let a = rb.vertex(p, &base, "i", wide, None);
+            let b = rb.vertex(q, &base, "i", wide, Some(a));
             if a != b {
                 stats.segments += 1;
                 by_face[i].push((a, b));

@@ -9,12 +9,22 @@
 //! (reusing any vertex within epsilon, so a crossing found in two faces is
 //! one vertex) just before the first piece that uses them.
 
-use geom::DVec3;
+use geom::{DVec3, Plane};
 use rustc_hash::{FxHashMap, FxHashSet};
 use ug::{Face, FaceId, Item, Model, Vertex, VertexId};
 use winged::pieces::{Point, to_contours};
 
 pub use check::face_geoms;
+
+/// How far (in epsilons) an end of a cut segment reuses a vertex that lies
+/// on both faces' planes: one crossing found by two pairs (a pipe's facet
+/// through a pier and through the lintel beside it, at 11°) comes out a
+/// little more than epsilon apart where the planes meet at a shallow
+/// angle, and the two vertices, 1.05 epsilon apart, left the facet's
+/// corner 1.05 epsilon inside the wall (property seed 8627). A segment's
+/// two ends never become one vertex so (a floor's cut across a column
+/// face's tip 2 epsilon wide stays a cut).
+const SNAP_EPSILONS: f64 = 2.0;
 
 /// The output model under construction.
 pub struct Rebuild {
@@ -81,9 +91,55 @@ impl Rebuild {
         best.map(|b| b.1)
     }
 
-    /// The vertex within epsilon of `p`, or a new one named `BASE.TAGvK`.
-    pub fn vertex(&mut self, p: DVec3, base: &str, tag: &str) -> VertexId {
+    /// The nearest vertex within [`SNAP_EPSILONS`]·epsilon of `p` that lies
+    /// within epsilon of every plane of `planes` (lowest id on ties).
+    fn find_wide(&self, p: DVec3, planes: &[&Plane], not: Option<VertexId>) -> Option<VertexId> {
+        let (x, y, z) = self.key(p);
+        let r = SNAP_EPSILONS * self.eps;
+        let mut best: Option<(f64, VertexId)> = None;
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    for &v in self
+                        .grid
+                        .get(&(x + dx, y + dy, z + dz))
+                        .into_iter()
+                        .flatten()
+                    {
+                        let q = self.out.vertices[v.idx()].pos;
+                        let d = (q - p).length();
+                        if d <= r
+                            && Some(v) != not
+                            && planes.iter().all(|pl| pl.dist(q).abs() <= self.eps)
+                            && best.is_none_or(|(b, w)| d < b || (d == b && v < w))
+                        {
+                            best = Some((d, v));
+                        }
+                    }
+                }
+            }
+        }
+        best.map(|b| b.1)
+    }
+
+    /// The vertex within epsilon of `p`, else one within
+    /// [`SNAP_EPSILONS`]·epsilon on all of `planes` (the planes of the
+    /// faces the point lies on; none: no such reuse) other than `not`, or
+    /// a new one named `BASE.TAGvK`.
+    pub fn vertex(
+        &mut self,
+        p: DVec3,
+        base: &str,
+        tag: &str,
+        planes: &[&Plane],
+        not: Option<VertexId>,
+    ) -> VertexId {
         if let Some(v) = self.find(p) {
+            return v;
+        }
+        if !planes.is_empty()
+            && let Some(v) = self.find_wide(p, planes, not)
+        {
             return v;
         }
         let mut k = self.new_vertices;
@@ -139,7 +195,7 @@ impl Rebuild {
     ) -> usize {
         let mut contours: Vec<Vec<Vec<VertexId>>> = Vec::with_capacity(pieces.len());
         for loops in pieces {
-            let c = to_contours(loops, |p| self.vertex(p, base, tag));
+            let c = to_contours(loops, |p| self.vertex(p, base, tag, &[], None));
             if !c.is_empty() {
                 contours.push(c);
             }

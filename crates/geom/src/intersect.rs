@@ -299,11 +299,18 @@ fn relate_on_line(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Relation {
     // resolve: ugisect's snap rounding measures the corner itself). Only
     // where the line is the planes' line at a shallow angle (vertices on
     // both planes spanning an area: a rug on a tile) the foot is tried.
+    // At a steep angle the middle of a stretch is the middle of its end
+    // points as tried (see `cut_segments`).
+    let steep = a.plane.n.cross(b.plane.n).length_squared() >= 1.0 / 16.0;
     let mut samples = Vec::with_capacity(ts.len() * 2);
     for (k, &t) in ts.iter().enumerate() {
         samples.push(near[k]);
         if let Some(&t2) = ts.get(k + 1) {
-            samples.push(p0 + dir * ((t + t2) / 2.0));
+            samples.push(if steep {
+                (near[k] + near[k + 1]) / 2.0
+            } else {
+                p0 + dir * ((t + t2) / 2.0)
+            });
         }
     }
     let mut touch = false;
@@ -589,7 +596,17 @@ pub fn cut_segments(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Vec<(DVec3, DVec3)>
             && (la == Location::Inside || lb == Location::Inside)
     };
     for (k, w) in ts.windows(2).enumerate() {
-        let s = p0 + dir * ((w[0] + w[1]) / 2.0);
+        // At a steep angle, between the ends as tried: where the faces
+        // share an edge whose vertices lie within epsilon of both planes,
+        // the planes' line may run 1.08 epsilon inside both faces (a roof
+        // at 20° on a slab's eave, both planar only within epsilon;
+        // property seed 27265), and its middle is no point of either
+        // boundary, while the edge's middle is.
+        let s = if steep {
+            (near[k] + near[k + 1]) / 2.0
+        } else {
+            p0 + dir * ((w[0] + w[1]) / 2.0)
+        };
         let la = a.locate(s, eps);
         if la == Location::Outside {
             continue;
@@ -719,6 +736,39 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// A roof piece at 20° on a slab piece's eave, the two sharing that
+    /// edge, both planar only within epsilon (property seed 27265): the
+    /// planes' line runs 1.08 epsilon inside both faces, so its middle
+    /// between the edge's ends was inside both, an intersection, while
+    /// the only cut through the ends was the shared edge itself. The
+    /// middle of a stretch between vertices is now taken between them:
+    /// they touch.
+    #[test]
+    fn faces_sharing_an_edge_off_the_planes_line_touch() {
+        let eps = 1.3031225921596104e-5;
+        let slab = FaceGeom::new(vec![vec![
+            DVec3::new(5.015846397000653, 0.14999976254880565, 2.9999992099778825),
+            DVec3::new(4.765917246387643, 0.2867807285092018, 3.000000968946496),
+            DVec3::new(4.765917187974574, 4.1916393959123495, 3.000000577908634),
+            DVec3::new(4.765846532445101, 4.1916382472938025, 3.000001083333685),
+            DVec3::new(4.765844397034348, 0.03345045587952828, 3.0000001319028233),
+            DVec3::new(5.015846400432814, 0.033450314559720695, 2.999999156740722),
+        ]])
+        .unwrap();
+        let roof = FaceGeom::new(vec![vec![
+            DVec3::new(4.802890352433134, 4.191639410839906, 3.000000573402579),
+            DVec3::new(5.015846277982049, 4.19163811627445, 3.000001056107174),
+            DVec3::new(5.015845751847234, 2.1125446049388095, 3.766037905694291),
+            DVec3::new(4.765846652101182, 2.112544613577388, 3.7660378957905727),
+            DVec3::new(4.765846532445101, 4.1916382472938025, 3.000001083333685),
+            DVec3::new(4.765917187974574, 4.1916393959123495, 3.000000577908634),
+        ]])
+        .unwrap();
+        assert_eq!(relate(&slab, &roof, eps), Relation::Touch);
+        assert_eq!(relate(&roof, &slab, eps), Relation::Touch);
+        assert!(cut_segments(&slab, &roof, eps).is_empty());
     }
 
     /// A pyramid's apex resting inside a floor touches it: the faces meet

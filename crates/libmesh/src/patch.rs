@@ -507,7 +507,10 @@ struct Ctx<'m> {
     planes: FacePlanes,
     /// Every face's contour edges, (lower vertex, higher, face), sorted:
     /// the faces across an edge, for [`fold_points`].
-    edge_faces: Vec<(VertexId, VertexId, FaceId)>,
+    edge_faces: std::cell::OnceCell<Vec<EdgeUse>>,
+    /// Faces' unit normals and their contours' signed areas about them,
+    /// made when [`fold_points`] first asks.
+    fold_normals: std::cell::RefCell<FxHashMap<FaceId, Option<FoldNormal>>>,
 }
 
 impl Ctx<'_> {
@@ -602,18 +605,32 @@ impl Ctx<'_> {
             // An edge lying in the face's plane (a box's bottom edge
             // standing on a floor, without ugisect) rests in it all along,
             // an intersection: its points are kept.
+            // In a model without intersections such a face has one of
+            // the edge's ends (its plane meets the edge there at a small
+            // angle); any other would be crossed by the edge.
+            let mut among: Vec<u32> = self.planes.around(key.0).to_vec();
+            among.extend_from_slice(self.planes.around(key.1));
+            among.sort_unstable();
+            among.dedup();
             ts.retain(|&(t, _)| {
-                let rest = self.planes.resting(m, p + (q - p) * t, eps, |face| {
-                    let mut has = [false; 2];
-                    for &w in face.contours.iter().flatten() {
-                        has[0] |= w == key.0;
-                        has[1] |= w == key.1;
-                    }
-                    has[0] && has[1]
-                });
-                rest.iter().all(|&k| {
-                    self.planes.near_plane(k, p, eps) && self.planes.near_plane(k, q, eps)
-                })
+                self.planes
+                    .resting_among(
+                        m,
+                        p + (q - p) * t,
+                        eps,
+                        &among,
+                        |face| {
+                            let mut has = [false; 2];
+                            for &w in face.contours.iter().flatten() {
+                                has[0] |= w == key.0;
+                                has[1] |= w == key.1;
+                            }
+                            has[0] && has[1]
+                        },
+                        // The edge lying in the plane.
+                        |n, c| (p - c).dot(n).abs() <= eps && (q - c).dot(n).abs() <= eps,
+                    )
+                    .is_empty()
             });
             let pts: Vec<VertexId> = ts
                 .iter()
@@ -769,84 +786,117 @@ fn near_corner_joins(model: &Model, out: &Model, eps: f64) -> Joins {
     joins
 }
 
-/// The model's top-level faces for point queries: a box index, and each
-/// face's mesh frame, the centre of its vertices and its contours in the
-/// frame, made when first asked for.
+/// The model's top-level faces for point queries: the faces at each
+/// vertex, and each face's plane (unit normal, centre of its vertices),
+/// mesh frame and contours in the frame, made when first asked for.
 struct FacePlanes {
     faces: Vec<FaceId>,
-    index: BoxIndex,
+    /// Per face: not made yet, or its plane (unit normal, centre), if any.
+    plane: Vec<Option<Option<(DVec3, DVec3)>>>,
     flat: FxHashMap<u32, Option<Flat>>,
+    /// The faces at each vertex: `at[start[v]..start[v + 1]]`.
+    start: Vec<u32>,
+    at: Vec<u32>,
 }
 
-/// (frame, centre of the face's vertices, contours in the frame)
-type Flat = (Frame, DVec3, Vec<Vec<DVec2>>);
+/// (frame, contours in the frame)
+type Flat = (Frame, Vec<Vec<DVec2>>);
 
 impl FacePlanes {
-    fn new(m: &Model, eps: f64) -> FacePlanes {
+    fn new(m: &Model) -> FacePlanes {
         let faces: Vec<FaceId> = m.top_faces().collect();
-        let index = BoxIndex::new(faces.iter().enumerate().map(|(k, &f)| {
-            let (lo, hi) = bbox(
+        let mut pairs: Vec<(u32, u32)> = faces
+            .iter()
+            .enumerate()
+            .flat_map(|(k, &f)| {
                 m.faces[f.idx()]
                     .contours
                     .iter()
                     .flatten()
-                    .map(|&v| m.pos(v)),
-                eps,
-            );
-            (lo, hi, k as u32)
-        }));
+                    .map(move |v| (v.0, k as u32))
+            })
+            .collect();
+        pairs.sort_unstable();
+        pairs.dedup();
+        let mut start = vec![0u32; m.vertices.len() + 1];
+        for &(v, _) in &pairs {
+            start[v as usize + 1] += 1;
+        }
+        for i in 1..start.len() {
+            start[i] += start[i - 1];
+        }
         FacePlanes {
+            plane: vec![None; faces.len()],
             faces,
-            index,
             flat: FxHashMap::default(),
+            start,
+            at: pairs.into_iter().map(|(_, k)| k).collect(),
         }
     }
 
-    /// Whether `p` lies within `eps` of the plane of face `k` (an index
-    /// into `faces` that [`FacePlanes::resting`] has given).
-    fn near_plane(&self, k: u32, p: DVec3, eps: f64) -> bool {
-        match self.flat.get(&k) {
-            Some(Some((frame, centre, _))) => (p - *centre).dot(frame.n).abs() <= eps,
-            _ => false,
+    /// The faces (indices into `faces`) that have vertex `v`.
+    fn around(&self, v: VertexId) -> &[u32] {
+        match self.start.get(v.idx()..v.idx() + 2) {
+            Some(&[a, b]) => &self.at[a as usize..b as usize],
+            _ => &[],
         }
     }
 
-    /// The faces (indices into `faces`) that `p` rests inside: within
-    /// `eps` of the plane, inside the contours by more than `eps`; faces
-    /// for which `skip` holds are not tried.
-    fn resting(&mut self, m: &Model, p: DVec3, eps: f64, skip: impl Fn(&Face) -> bool) -> Vec<u32> {
-        let e = DVec3::splat(eps);
+    /// The faces among `among` (indices into `faces`) that `p` rests
+    /// inside: within `eps` of the plane, inside the contours by more than
+    /// `eps`; faces for which `skip` holds are not tried, nor those for
+    /// which `skip_plane` holds of the plane (its unit normal and a point
+    /// on it).
+    fn resting_among(
+        &mut self,
+        m: &Model,
+        p: DVec3,
+        eps: f64,
+        among: &[u32],
+        skip: impl Fn(&Face) -> bool,
+        skip_plane: impl Fn(DVec3, DVec3) -> bool,
+    ) -> Vec<u32> {
         let mut out = Vec::new();
-        for k in self.index.query(p - e, p + e) {
+        let pts = |face: &Face| -> Vec<Vec<DVec3>> {
+            face.contours
+                .iter()
+                .map(|c| c.iter().map(|&w| m.pos(w)).collect())
+                .collect()
+        };
+        for &k in among {
             let face = &m.faces[self.faces[k as usize].idx()];
-            if skip(face) {
+            // The plane first (cheap), the face's own test, then its
+            // contours in its frame.
+            let Some((n, centre)) = *self.plane[k as usize].get_or_insert_with(|| {
+                let pts = pts(face);
+                let n = geom::face_normal(&pts)?.normalize();
+                let count: usize = pts.iter().map(Vec::len).sum();
+                Some((
+                    n,
+                    pts.iter().flatten().copied().sum::<DVec3>() / count as f64,
+                ))
+            }) else {
+                continue;
+            };
+            if (p - centre).dot(n).abs() > eps || skip_plane(n, centre) || skip(face) {
                 continue;
             }
-            let Some((frame, centre, c2)) = self
+            let Some((frame, c2)) = self
                 .flat
                 .entry(k)
                 .or_insert_with(|| {
-                    let pts: Vec<Vec<DVec3>> = face
-                        .contours
-                        .iter()
-                        .map(|c| c.iter().map(|&w| m.pos(w)).collect())
-                        .collect();
+                    let pts = pts(face);
                     let frame = mesh_frame(&pts)?;
-                    let all: Vec<DVec3> = pts.iter().flatten().copied().collect();
-                    let centre = all.iter().copied().sum::<DVec3>() / all.len() as f64;
                     let c2 = pts
                         .iter()
                         .map(|c| c.iter().map(|&q| frame.to_2d(q)).collect())
                         .collect();
-                    Some((frame, centre, c2))
+                    Some((frame, c2))
                 })
                 .as_ref()
             else {
                 continue;
             };
-            if (p - *centre).dot(frame.n).abs() > eps {
-                continue;
-            }
             let q = frame.to_2d(p);
             if geom::polygon::locate_2d(q, c2) != geom::polygon::Location::Inside {
                 continue;
@@ -882,59 +932,117 @@ fn resting_points(
     planes: &mut FacePlanes,
     m: &Model,
     eps: f64,
+    (edges, estart, ends): (&[(VertexId, VertexId)], &[u32], &[u32]),
 ) -> FxHashMap<FaceId, Vec<VertexId>> {
     let mut out: FxHashMap<FaceId, Vec<VertexId>> = FxHashMap::default();
-    if eps.is_nan() || eps <= 0.0 {
+    if eps.is_nan() || eps <= 0.0 || planes.faces.is_empty() {
         return out;
     }
-    let mut used: Vec<VertexId> = planes
-        .faces
-        .iter()
-        .flat_map(|&f| m.faces[f.idx()].contours.iter().flatten().copied())
+    // Each vertex's neighbours along the contours (`edges_at_vertices`).
+    let neighbours = |v: u32| {
+        ends[estart[v as usize] as usize..estart[v as usize + 1] as usize]
+            .iter()
+            .map(move |&j| {
+                let (a, b) = edges[j as usize];
+                if a.0 == v { b } else { a }
+            })
+    };
+    // The vertices on faces in a grid of cells about 1/256 of the model.
+    let used: Vec<u32> = (0..m.vertices.len() as u32)
+        .filter(|&v| estart[v as usize] < estart[v as usize + 1])
         .collect();
-    used.sort_unstable();
-    used.dedup();
-    let mut found: Vec<(VertexId, u32)> = Vec::new();
-    for v in used {
-        for k in planes.resting(m, m.pos(v), eps, |face| {
-            face.contours.iter().flatten().any(|&w| w == v)
-        }) {
-            found.push((v, k));
-        }
+    let (lo, hi) = bbox(used.iter().map(|&v| m.pos(VertexId(v))), 0.0);
+    let cell = ((hi - lo).length() / 256.0).max(4.0 * eps);
+    let key = |p: DVec3| {
+        let q = ((p - lo) / cell).floor();
+        (q.x as i64, q.y as i64, q.z as i64)
+    };
+    let mut grid: FxHashMap<(i64, i64, i64), Vec<u32>> = FxHashMap::default();
+    for &v in &used {
+        grid.entry(key(m.pos(VertexId(v)))).or_default().push(v);
     }
-    if found.is_empty() {
-        return out;
-    }
-    // Only isolated contacts: a vertex with an edge lying in the face's
-    // plane (a box's corner standing on a floor) has that edge resting in
-    // the face too, an intersection that ugisect cuts; taking its corner
-    // alone would only change the mesh (the Cornell box's blocks on their
-    // floor, without ugisect).
-    let mut next: FxHashMap<VertexId, Vec<VertexId>> =
-        found.iter().map(|&(v, _)| (v, Vec::new())).collect();
-    for &f in &planes.faces {
-        for c in &m.faces[f.idx()].contours {
-            for i in 0..c.len() {
-                let (a, b) = (c[i], c[(i + 1) % c.len()]);
-                if let Some(l) = next.get_mut(&a) {
-                    l.push(b);
+    let mut found: Vec<(u32, u32)> = Vec::new();
+    for k in 0..planes.faces.len() {
+        let face = &m.faces[planes.faces[k].idx()];
+        let pts: Vec<Vec<DVec3>> = face
+            .contours
+            .iter()
+            .map(|c| c.iter().map(|&w| m.pos(w)).collect())
+            .collect();
+        let Some(n) = geom::face_normal(&pts) else {
+            continue;
+        };
+        let n = n.normalize();
+        let count: usize = pts.iter().map(Vec::len).sum();
+        let centre = pts.iter().flatten().copied().sum::<DVec3>() / count as f64;
+        planes.plane[k] = Some(Some((n, centre)));
+        let (flo, fhi) = bbox(pts.iter().flatten().copied(), eps);
+        let (a, b) = (key(flo), key(fhi));
+        let cells = (b.0 - a.0 + 1) as f64 * (b.1 - a.1 + 1) as f64 * (b.2 - a.2 + 1) as f64;
+        let mut cand: Vec<u32> = Vec::new();
+        let mut take = |vs: &Vec<u32>| {
+            for &v in vs {
+                let p = m.pos(VertexId(v));
+                if p.cmpge(flo).all() && p.cmple(fhi).all() && (p - centre).dot(n).abs() <= eps {
+                    cand.push(v);
                 }
-                if let Some(l) = next.get_mut(&b) {
-                    l.push(a);
+            }
+        };
+        if cells > grid.len() as f64 {
+            for (c, vs) in &grid {
+                if (a.0..=b.0).contains(&c.0)
+                    && (a.1..=b.1).contains(&c.1)
+                    && (a.2..=b.2).contains(&c.2)
+                {
+                    take(vs);
+                }
+            }
+        } else {
+            for x in a.0..=b.0 {
+                for y in a.1..=b.1 {
+                    for z in a.2..=b.2 {
+                        if let Some(vs) = grid.get(&(x, y, z)) {
+                            take(vs);
+                        }
+                    }
                 }
             }
         }
-    }
-    for (v, k) in found {
-        let Some((frame, centre, _)) = &planes.flat[&k] else {
-            continue;
-        };
-        if next[&v]
-            .iter()
-            .any(|&w| (m.pos(w) - *centre).dot(frame.n).abs() <= eps)
-        {
-            continue;
+        for v in cand {
+            // Not the face's own, and only isolated contacts: a vertex with
+            // an edge lying in the face's plane (a box's corner standing on
+            // a floor) has that edge resting in the face too, an
+            // intersection that ugisect cuts; taking its corner alone would
+            // only change the mesh (the Cornell box's blocks on their
+            // floor, without ugisect).
+            if planes
+                .around(VertexId(v))
+                .binary_search(&(k as u32))
+                .is_ok()
+            {
+                continue;
+            }
+            if neighbours(v).any(|w| (m.pos(w) - centre).dot(n).abs() <= eps) {
+                continue;
+            }
+            if !planes
+                .resting_among(
+                    m,
+                    m.pos(VertexId(v)),
+                    eps,
+                    &[k as u32],
+                    |_| false,
+                    |_, _| false,
+                )
+                .is_empty()
+            {
+                found.push((v, k as u32));
+            }
         }
+    }
+    found.sort_unstable();
+    for (v, k) in found {
+        let v = VertexId(v);
         let p = m.pos(v);
         let list = out.entry(planes.faces[k as usize]).or_default();
         if list.iter().all(|&w| m.pos(w).distance(p) > eps) {
@@ -944,13 +1052,47 @@ fn resting_points(
     out
 }
 
+/// A boundary segment (its ends, lower first) and the contour edge it is
+/// part of (lower end first).
+type SegmentOf = ((VertexId, VertexId), (VertexId, VertexId));
+
+/// A face's unit normal and its contours' signed areas about it.
+type FoldNormal = (DVec3, Vec<f64>);
+
+/// A face's use of an edge: (lower vertex, higher vertex, the face, its
+/// contour, whether it walks the edge from the lower vertex).
+type EdgeUse = (VertexId, VertexId, FaceId, u32, bool);
+
+/// Every face's contour edges as [`EdgeUse`]s, sorted.
+fn edge_uses(m: &Model) -> Vec<EdgeUse> {
+    let mut e: Vec<EdgeUse> = m
+        .top_faces()
+        .flat_map(|f| {
+            m.faces[f.idx()]
+                .contours
+                .iter()
+                .enumerate()
+                .flat_map(move |(ci, c)| {
+                    (0..c.len()).map(move |i| {
+                        let (a, b) = (c[i], c[(i + 1) % c.len()]);
+                        (a.min(b), a.max(b), f, ci as u32, a < b)
+                    })
+                })
+        })
+        .collect();
+    e.sort_unstable();
+    e.dedup_by_key(|x| (x.0, x.1, x.2));
+    e
+}
+
 /// Vertex joins, (from, to).
 type Joins = Vec<(VertexId, VertexId)>;
 
 /// The meshing of a prepared model; also the joins [`jog_points`] asked for.
 fn mesh_all(m: &Model, opts: Options, mut stats: Stats) -> Result<(Model, Stats, Joins), String> {
-    let mut planes = FacePlanes::new(m, opts.eps);
-    let resting = resting_points(&mut planes, m, opts.eps);
+    let (edges, start, ends) = edges_at_vertices(m);
+    let mut planes = FacePlanes::new(m);
+    let resting = resting_points(&mut planes, m, opts.eps, (&edges, &start, &ends));
     let mut cx = Ctx {
         m,
         opts,
@@ -963,7 +1105,6 @@ fn mesh_all(m: &Model, opts: Options, mut stats: Stats) -> Result<(Model, Stats,
             .chain(m.wires.iter().filter_map(|w| w.name.clone()))
             .collect(),
         div: {
-            let (edges, start, ends) = edges_at_vertices(m);
             let (feet, thin) = feet_and_thin(m, opts.eps);
             Divisions {
                 map: FxHashMap::default(),
@@ -977,22 +1118,8 @@ fn mesh_all(m: &Model, opts: Options, mut stats: Stats) -> Result<(Model, Stats,
         stuck: Vec::new(),
         resting,
         planes,
-        edge_faces: {
-            let mut e: Vec<(VertexId, VertexId, FaceId)> = m
-                .top_faces()
-                .flat_map(|f| {
-                    m.faces[f.idx()].contours.iter().flat_map(move |c| {
-                        (0..c.len()).map(move |i| {
-                            let (a, b) = (c[i], c[(i + 1) % c.len()]);
-                            (a.min(b), a.max(b), f)
-                        })
-                    })
-                })
-                .collect();
-            e.sort_unstable();
-            e.dedup();
-            e
-        },
+        edge_faces: std::cell::OnceCell::new(),
+        fold_normals: Default::default(),
     };
     stats.resting = cx.resting.values().map(Vec::len).sum();
     let mut out = Model {
@@ -1178,7 +1305,7 @@ fn mesh_face(
     // 1. Boundary: contours with division points.
     let mut bcontours: Vec<Vec<VertexId>> = Vec::new();
     // Each boundary segment's contour edge (both sorted).
-    let mut borig: FxHashMap<(VertexId, VertexId), (VertexId, VertexId)> = FxHashMap::default();
+    let mut borig: Vec<SegmentOf> = Vec::new();
     for c in &face.contours {
         let mut bc = Vec::new();
         for i in 0..c.len() {
@@ -1187,7 +1314,7 @@ fn mesh_face(
             bc.extend(cx.divided(a, b));
             for k in from..bc.len() {
                 let (u, v) = (bc[k], if k + 1 < bc.len() { bc[k + 1] } else { b });
-                borig.insert((u.min(v), u.max(v)), (a.min(b), a.max(b)));
+                borig.push(((u.min(v), u.max(v)), (a.min(b), a.max(b))));
             }
         }
         bcontours.push(bc);
@@ -1978,7 +2105,7 @@ fn fold_points(
     tris: &[[VertexId; 3]],
     steiner: &[DVec2],
     at: &dyn Fn(VertexId) -> DVec2,
-    borig: &FxHashMap<(VertexId, VertexId), (VertexId, VertexId)>,
+    borig: &[SegmentOf],
     segs: &[(DVec2, DVec2)],
     seg_index: &BoxIndex,
 ) -> Vec<DVec2> {
@@ -1999,22 +2126,38 @@ fn fold_points(
     let reach = 3.0 * eps / min_sin;
     let mut key: Option<Vec<VertexId>> = None;
     let to3 = |w: DVec2| frame.u * w.x + frame.v * w.y;
-    for t in tris {
+    // The triangles' edges with an apex that near (most faces have none;
+    // only then are the boundary segments looked up).
+    let mut low: Vec<(usize, usize, f64)> = Vec::new();
+    for (ti, t) in tris.iter().enumerate() {
         let p = t.map(pos);
         for i in 0..3 {
+            let (pa, pb, po) = (p[i], p[(i + 1) % 3], p[(i + 2) % 3]);
+            let l = (pb - pa).length();
+            if l > 0.0 {
+                let h = (pb - pa).perp_dot(po - pa).abs() / l;
+                if h < reach {
+                    low.push((ti, i, h));
+                }
+            }
+        }
+    }
+    if low.is_empty() {
+        return out;
+    }
+    let borig: FxHashMap<(VertexId, VertexId), (VertexId, VertexId)> =
+        borig.iter().copied().collect();
+    let edge_faces = cx.edge_faces.get_or_init(|| edge_uses(m));
+    for (ti, i, h) in low {
+        let t = &tris[ti];
+        let p = t.map(pos);
+        {
             let (a, b) = (t[i], t[(i + 1) % 3]);
             let Some(&(oa, ob)) = borig.get(&(a.min(b), a.max(b))) else {
                 continue;
             };
             let (pa, pb, po) = (p[i], p[(i + 1) % 3], p[(i + 2) % 3]);
             let l = (pb - pa).length();
-            if l <= 0.0 {
-                continue;
-            }
-            let h = (pb - pa).perp_dot(po - pa).abs() / l;
-            if h >= reach {
-                continue;
-            }
             // The face's inward direction at the edge, and the other faces'.
             let d2 = (pb - pa) / l;
             let mut n = d2.perp();
@@ -2023,9 +2166,9 @@ fn fold_points(
             }
             let inward = to3(n).normalize_or_zero();
             let dir = (m.pos(ob) - m.pos(oa)).normalize_or_zero();
-            let lo = cx.edge_faces.partition_point(|e| (e.0, e.1) < (oa, ob));
+            let lo = edge_faces.partition_point(|e| (e.0, e.1) < (oa, ob));
             let mut sin_fold: Option<f64> = None;
-            for &(_, _, g) in cx.edge_faces[lo..]
+            for &(_, _, g, ci, forward) in edge_faces[lo..]
                 .iter()
                 .take_while(|e| (e.0, e.1) == (oa, ob))
             {
@@ -2033,40 +2176,42 @@ fn fold_points(
                     continue;
                 }
                 let gface = &m.faces[g.idx()];
-                let pts: Vec<Vec<DVec3>> = gface
-                    .contours
-                    .iter()
-                    .map(|c| c.iter().map(|&v| m.pos(v)).collect())
-                    .collect();
-                let Some(gn) = geom::face_normal(&pts) else {
-                    continue;
-                };
-                // Where g walks the edge, and on which side its inside is:
-                // left of the walk for an outer contour walked
-                // counter-clockwise about its normal or a hole walked
-                // clockwise.
-                let Some((ci, forward)) = gface.contours.iter().enumerate().find_map(|(ci, c)| {
-                    (0..c.len()).find_map(|k| {
-                        let (x, y) = (c[k], c[(k + 1) % c.len()]);
-                        if (x, y) == (oa, ob) {
-                            Some((ci, true))
-                        } else if (x, y) == (ob, oa) {
-                            Some((ci, false))
-                        } else {
-                            None
-                        }
+                // Its normal and its contours' signed areas about it.
+                let Some((gn, area)) = cx
+                    .fold_normals
+                    .borrow_mut()
+                    .entry(g)
+                    .or_insert_with(|| {
+                        let pts: Vec<Vec<DVec3>> = gface
+                            .contours
+                            .iter()
+                            .map(|c| c.iter().map(|&v| m.pos(v)).collect())
+                            .collect();
+                        let gn = geom::face_normal(&pts)?.normalize();
+                        let gframe = Frame::new(DVec3::ZERO, gn);
+                        let areas = pts
+                            .iter()
+                            .map(|c| {
+                                let c2: Vec<DVec2> = c.iter().map(|&q| gframe.to_2d(q)).collect();
+                                geom::signed_area_2d(&c2)
+                            })
+                            .collect::<Vec<f64>>();
+                        Some((gn, areas))
                     })
-                }) else {
+                    .as_ref()
+                    .map(|(n, areas)| (*n, areas[ci as usize]))
+                else {
                     continue;
                 };
-                let gframe = Frame::new(DVec3::ZERO, gn);
-                let c2: Vec<DVec2> = pts[ci].iter().map(|&q| gframe.to_2d(q)).collect();
-                let area = geom::signed_area_2d(&c2);
+                // Where g walks the edge (`forward`: from the lower vertex),
+                // and on which side its inside is: left of the walk for an
+                // outer contour walked counter-clockwise about its normal
+                // or a hole walked clockwise.
                 if area == 0.0 {
                     continue;
                 }
                 let walk = if forward { dir } else { -dir };
-                let mut gin = gn.normalize().cross(walk);
+                let mut gin = gn.cross(walk);
                 if (ci == 0) != (area > 0.0) {
                     gin = -gin;
                 }
@@ -2075,7 +2220,13 @@ fn fold_points(
                 if gin.dot(inward) <= 0.0 {
                     continue;
                 }
-                let s = gin.cross(inward).length().max(min_sin);
+                // Under 1° the faces lie on each other (coincident faces
+                // sharing an edge): no point across mends that, and such
+                // overlaps are ugcopl's and ugclean's.
+                let s = gin.cross(inward).length();
+                if s < min_sin {
+                    continue;
+                }
                 if s >= 0.5 {
                     continue;
                 }
