@@ -67,35 +67,15 @@ impl Rebuild {
         (k.x as i64, k.y as i64, k.z as i64)
     }
 
-    /// The nearest vertex within epsilon (lowest id on ties).
-    pub fn find(&self, p: DVec3) -> Option<VertexId> {
+    /// The nearest vertex within `r` of `p` (at most the grid's cell)
+    /// that `accept` takes, given its id and position (lowest id on ties).
+    fn nearest(
+        &self,
+        p: DVec3,
+        r: f64,
+        accept: impl Fn(VertexId, DVec3) -> bool,
+    ) -> Option<VertexId> {
         let (x, y, z) = self.key(p);
-        let mut best: Option<(f64, VertexId)> = None;
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    for &v in self
-                        .grid
-                        .get(&(x + dx, y + dy, z + dz))
-                        .into_iter()
-                        .flatten()
-                    {
-                        let d = (self.out.vertices[v.idx()].pos - p).length();
-                        if d <= self.eps && best.is_none_or(|(b, w)| d < b || (d == b && v < w)) {
-                            best = Some((d, v));
-                        }
-                    }
-                }
-            }
-        }
-        best.map(|b| b.1)
-    }
-
-    /// The nearest vertex within [`SNAP_EPSILONS`]·epsilon of `p` that lies
-    /// within epsilon of every plane of `planes` (lowest id on ties).
-    fn find_wide(&self, p: DVec3, planes: &[&Plane], not: Option<VertexId>) -> Option<VertexId> {
-        let (x, y, z) = self.key(p);
-        let r = SNAP_EPSILONS * self.eps;
         let mut best: Option<(f64, VertexId)> = None;
         for dx in -1..=1 {
             for dy in -1..=1 {
@@ -109,9 +89,8 @@ impl Rebuild {
                         let q = self.out.vertices[v.idx()].pos;
                         let d = (q - p).length();
                         if d <= r
-                            && Some(v) != not
-                            && planes.iter().all(|pl| pl.dist(q).abs() <= self.eps)
                             && best.is_none_or(|(b, w)| d < b || (d == b && v < w))
+                            && accept(v, q)
                         {
                             best = Some((d, v));
                         }
@@ -120,6 +99,20 @@ impl Rebuild {
             }
         }
         best.map(|b| b.1)
+    }
+
+    /// The nearest vertex within epsilon (lowest id on ties).
+    pub fn find(&self, p: DVec3) -> Option<VertexId> {
+        self.nearest(p, self.eps, |_, _| true)
+    }
+
+    /// The nearest vertex within [`SNAP_EPSILONS`]·epsilon of `p` but
+    /// `not` that lies within epsilon of every plane of `planes` (lowest id
+    /// on ties).
+    fn find_wide(&self, p: DVec3, planes: &[&Plane], not: Option<VertexId>) -> Option<VertexId> {
+        self.nearest(p, SNAP_EPSILONS * self.eps, |v, q| {
+            Some(v) != not && planes.iter().all(|pl| pl.dist(q).abs() <= self.eps)
+        })
     }
 
     /// The vertex within epsilon of `p`, else one within

@@ -1978,31 +1978,9 @@ fn jog_points(
         })
         .collect();
     // The distance from q to the boundary but segment `skip`.
-    let clearance = |q: DVec2, skip: (DVec2, DVec2)| {
-        let r = 64.0 * eps;
-        seg_index
-            .query(
-                (q - DVec2::splat(r)).extend(0.0),
-                (q + DVec2::splat(r)).extend(0.0),
-            )
-            .into_iter()
-            .map(|k| segs[k as usize])
-            .filter(|&(s0, s1)| !((s0 == skip.0 && s1 == skip.1) || (s0 == skip.1 && s1 == skip.0)))
-            .map(|(s0, s1)| {
-                geom::point_segment_distance(q.extend(0.0), s0.extend(0.0), s1.extend(0.0)).0
-            })
-            .fold(r, f64::min)
-    };
-    let inside = |q: DVec2| {
-        segs.iter()
-            .filter(|(s0, s1)| {
-                (s0.y > q.y) != (s1.y > q.y)
-                    && q.x < s0.x + (q.y - s0.y) * (s1.x - s0.x) / (s1.y - s0.y)
-            })
-            .count()
-            % 2
-            == 1
-    };
+    let clearance =
+        |q: DVec2, skip: (DVec2, DVec2)| clearance(q, segs, seg_index, 64.0 * eps, Some(skip));
+    let inside = |q: DVec2| inside_of(q, segs);
     for (t, p) in needles {
         // A needle's shortest side, when it is a boundary edge, is treated
         // as a jog too, however long: a contour vertex within epsilon of the
@@ -2259,31 +2237,8 @@ fn fold_points(
                 continue;
             }
             let target = 6.0 * eps / s;
-            let clearance = |q: DVec2| {
-                let r = target.max(64.0 * eps);
-                seg_index
-                    .query(
-                        (q - DVec2::splat(r)).extend(0.0),
-                        (q + DVec2::splat(r)).extend(0.0),
-                    )
-                    .into_iter()
-                    .map(|k| segs[k as usize])
-                    .map(|(s0, s1)| {
-                        geom::point_segment_distance(q.extend(0.0), s0.extend(0.0), s1.extend(0.0))
-                            .0
-                    })
-                    .fold(r, f64::min)
-            };
-            let inside = |q: DVec2| {
-                segs.iter()
-                    .filter(|(s0, s1)| {
-                        (s0.y > q.y) != (s1.y > q.y)
-                            && q.x < s0.x + (q.y - s0.y) * (s1.x - s0.x) / (s1.y - s0.y)
-                    })
-                    .count()
-                    % 2
-                    == 1
-            };
+            let clearance = |q: DVec2| clearance(q, segs, seg_index, target.max(64.0 * eps), None);
+            let inside = |q: DVec2| inside_of(q, segs);
             let breaks = |q: DVec2| geom::incircle(pa, pb, po, q) > 0;
             let mut best: Option<(bool, f64, DVec2)> = None;
             for along in [0.5, 0.35, 0.65, 0.2, 0.8] {
@@ -2305,6 +2260,43 @@ fn fold_points(
         }
     }
     out
+}
+
+/// The distance from `q` to the nearest boundary segment (but `skip`,
+/// either way round), at most `r`.
+fn clearance(
+    q: DVec2,
+    segs: &[(DVec2, DVec2)],
+    seg_index: &BoxIndex,
+    r: f64,
+    skip: Option<(DVec2, DVec2)>,
+) -> f64 {
+    seg_index
+        .query(
+            (q - DVec2::splat(r)).extend(0.0),
+            (q + DVec2::splat(r)).extend(0.0),
+        )
+        .into_iter()
+        .map(|k| segs[k as usize])
+        .filter(|&(s0, s1)| {
+            skip.is_none_or(|(a, b)| !((s0 == a && s1 == b) || (s0 == b && s1 == a)))
+        })
+        .map(|(s0, s1)| {
+            geom::point_segment_distance(q.extend(0.0), s0.extend(0.0), s1.extend(0.0)).0
+        })
+        .fold(r, f64::min)
+}
+
+/// Whether `q` lies inside the boundary segments (even-odd, half-open).
+fn inside_of(q: DVec2, segs: &[(DVec2, DVec2)]) -> bool {
+    segs.iter()
+        .filter(|(s0, s1)| {
+            (s0.y > q.y) != (s1.y > q.y)
+                && q.x < s0.x + (q.y - s0.y) * (s1.x - s0.x) / (s1.y - s0.y)
+        })
+        .count()
+        % 2
+        == 1
 }
 
 /// Boundary edges shorter than this many epsilons whose needle no point
