@@ -691,3 +691,23 @@ fn a_division_point_resting_inside_another_face_is_left_out() {
         1e-9,
     );
 }
+
+/// A pipe's face piece ending on a globe in a corner of 24°, its end edge
+/// 2.6 epsilon long shared with the globe's piece at a fold of 25°
+/// (fixtures/cut/pipe-corner-on-a-globe.ug, property seed 13674): the
+/// foot of the end edge's far corner on the long side made a triangle of
+/// the end edge only a few epsilons across, which lay on the globe's
+/// patch (one overlapping pair at every length). No foot is placed across
+/// a corner from the vertex's own short edge to it now.
+#[test]
+fn no_foot_is_placed_across_a_corner_from_its_short_edge() {
+    cuts_cleanly(
+        "cut/pipe-corner-on-a-globe.ug",
+        "7.415256143224998e-6",
+        &["0.7", "0.3", "1", "2"],
+        // (the globe's piece is planar only within epsilon: its
+        // triangles' area differs from the polygon's by 2e-6, with or
+        // without the foot)
+        1e-5,
+    );
+}

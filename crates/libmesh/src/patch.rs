@@ -431,7 +431,19 @@ fn feet_and_thin(m: &Model, eps: f64) -> (Feet, Thin) {
                 if t * l <= 2.0 * eps || (1.0 - t) * l <= 2.0 * eps {
                     continue;
                 }
-                if d > eps {
+                // Not across a corner from its own short edge to the
+                // corner (an edge under JOG epsilon from the vertex to an end
+                // of g): the foot would make a triangle of that edge and the
+                // corner only a few epsilons across (a pipe's face ending in
+                // a corner of 24° on a globe, its end edge 2.6 epsilon long:
+                // the triangle lay on the globe's patch, folded at 25°,
+                // property seed 13674). The corner's triangle reaches along
+                // the side instead (or gets a point across its jog).
+                let corner = mine.clone().any(|e| {
+                    (e.0 == g.0 || e.0 == g.1 || e.1 == g.0 || e.1 == g.1)
+                        && m.pos(e.0).distance(m.pos(e.1)) < JOG * eps
+                });
+                if d > eps && !corner {
                     out.entry(g).or_default().push(t);
                 }
             }
