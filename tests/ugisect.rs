@@ -272,3 +272,20 @@ fn origin_annotations_go_before_every_piece() {
     assert_eq!(lines[tile - 1], "{ugcopl origin tile area 2}", "{out}");
     assert_eq!(out.matches("ugcopl origin").count(), 3, "{out}");
 }
+
+/// A window's pier piece and a wing's wall meeting at 6.5° along the
+/// pier's end (fixtures/isect/pier-end-on-a-wing-wall.ug, property seed
+/// 23054). In ugisect's second round the pier's cut ran 1.2 epsilon off
+/// the edge the two share; when a cut's ends reused any vertex within 2
+/// epsilon on both planes, they became the faces' own corners and the cut
+/// became that edge, which cuts nothing (one intersecting pair left). The
+/// wider reuse is kept for vertices the same run made: one crossing
+/// found by two pairs (property seed 8627).
+#[test]
+fn a_cut_near_a_shared_edge_is_not_snapped_onto_it() {
+    let name = "isect/pier-end-on-a-wing-wall.ug";
+    let src = std::fs::read_to_string(fixture(name)).unwrap();
+    let eps = ["-e", "2.212084013451486e-5"];
+    assert!(count(&check_eps(&src, &eps), "intersecting") > 0);
+    assert_cut_eps(name, &src, &eps, 1e-7);
+}

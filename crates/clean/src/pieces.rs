@@ -37,6 +37,8 @@ pub struct Rebuild {
     emitted: usize,
     /// Vertices created so far.
     pub new_vertices: usize,
+    /// The id of the first vertex created here.
+    first_new: usize,
 }
 
 impl Rebuild {
@@ -54,6 +56,7 @@ impl Rebuild {
             vnames: m.vertices.iter().map(|v| v.name.clone()).collect(),
             emitted: m.vertices.len(),
             new_vertices: 0,
+            first_new: m.vertices.len(),
         };
         for (k, v) in m.vertices.iter().enumerate() {
             let key = r.key(v.pos);
@@ -106,12 +109,17 @@ impl Rebuild {
         self.nearest(p, self.eps, |_, _| true)
     }
 
-    /// The nearest vertex within [`SNAP_EPSILONS`]·epsilon of `p` but
-    /// `not` that lies within epsilon of every plane of `planes` (lowest id
-    /// on ties).
+    /// The nearest vertex created here within [`SNAP_EPSILONS`]·epsilon of
+    /// `p` but `not` that lies within epsilon of every plane of `planes`
+    /// (lowest id on ties). Only new ones: the reuse is for one crossing
+    /// found by two pairs; snapped so onto the faces' own corners, a cut
+    /// 1.2 epsilon off a shared edge became that edge, and cut nothing
+    /// (property seed 23054).
     fn find_wide(&self, p: DVec3, planes: &[&Plane], not: Option<VertexId>) -> Option<VertexId> {
         self.nearest(p, SNAP_EPSILONS * self.eps, |v, q| {
-            Some(v) != not && planes.iter().all(|pl| pl.dist(q).abs() <= self.eps)
+            v.idx() >= self.first_new
+                && Some(v) != not
+                && planes.iter().all(|pl| pl.dist(q).abs() <= self.eps)
         })
     }
 
