@@ -129,10 +129,11 @@ pub(crate) fn isect_once(
             .name
             .clone()
             .unwrap_or_else(|| format!("f{}", i + 1));
-        let planes: Vec<&geom::Plane> = [i, j]
-            .iter()
-            .filter_map(|&k| geoms[k].as_ref().map(|g| &g.plane))
-            .collect();
+        // (Only pairs of faces with a plane have cut segments.)
+        let planes: [&geom::Plane; 2] = match (&geoms[i], &geoms[j]) {
+            (Some(a), Some(b)) => [&a.plane, &b.plane],
+            _ => continue,
+        };
         for &(p, q) in segs {
             // (A short segment's ends are found within epsilon only.)
             let wide: &[&geom::Plane] = if p.distance(q) > 4.0 * eps {

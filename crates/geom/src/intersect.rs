@@ -279,12 +279,17 @@ pub fn relate(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Relation {
 /// [`relate`] by the line where the planes meet, point contacts taken as
 /// intersections.
 fn relate_on_line(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Relation {
-    let (p0, dir, ts, near) = match line_of(a, b, eps) {
+    let (p0, dir, ts, near, steep) = match line_of(a, b, eps) {
         LineCase::Coplanar => return Relation::Coplanar,
         LineCase::Disjoint => return Relation::Disjoint,
         LineCase::Line {
-            p0, dir, ts, near, ..
-        } => (p0, dir, ts, near),
+            p0,
+            dir,
+            ts,
+            near,
+            steep,
+            ..
+        } => (p0, dir, ts, near, steep),
     };
     // Each boundary point, and the middle of each stretch of the line
     // between them, as `cut_segments` tries it. A vertex within epsilon
@@ -301,7 +306,6 @@ fn relate_on_line(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Relation {
     // both planes spanning an area: a rug on a tile) the foot is tried.
     // At a steep angle the middle of a stretch is the middle of its end
     // points as tried (see `cut_segments`).
-    let steep = a.plane.n.cross(b.plane.n).length_squared() >= 1.0 / 16.0;
     let mut samples = Vec::with_capacity(ts.len() * 2);
     for (k, &t) in ts.iter().enumerate() {
         samples.push(near[k]);
@@ -352,6 +356,8 @@ enum LineCase {
         /// is the planes' line (there its foot, as `at`); a crossing as
         /// `at`.
         near: Vec<DVec3>,
+        /// At least 14.5° between the planes (sin θ ≥ 1/4).
+        steep: bool,
     },
 }
 
@@ -554,6 +560,7 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
         ts,
         at,
         near,
+        steep,
     }
 }
 
@@ -574,20 +581,19 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
 /// face), a cut of 4 `eps` along the line through the point stands for it.
 /// Empty for disjoint, touching or coplanar faces.
 pub fn cut_segments(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Vec<(DVec3, DVec3)> {
-    let (p0, dir, ts, at, near) = match line_of(a, b, eps) {
+    let (p0, dir, ts, at, near, steep) = match line_of(a, b, eps) {
         LineCase::Line {
             p0,
             dir,
             ts,
             at,
             near,
-        } => (p0, dir, ts, at, near),
+            steep,
+        } => (p0, dir, ts, at, near, steep),
         _ => return Vec::new(),
     };
     // Stretches between boundary events, as indices into `ts`.
     let mut out: Vec<(usize, usize)> = Vec::new();
-    // At least 14.5° between the planes (sin θ ≥ 1/4).
-    let steep = a.plane.n.cross(b.plane.n).length_squared() >= 1.0 / 16.0;
     let meets_at = |s: DVec3| {
         let la = a.locate(s, eps);
         let lb = b.locate(s, eps);

@@ -854,6 +854,25 @@ impl FacePlanes {
         }
     }
 
+    /// The plane of face `k` (an index into `faces`): its unit normal and
+    /// the centre of its vertices, made when first asked for.
+    fn plane_of(&mut self, m: &Model, k: u32) -> Option<(DVec3, DVec3)> {
+        let face = &m.faces[self.faces[k as usize].idx()];
+        *self.plane[k as usize].get_or_insert_with(|| {
+            let pts: Vec<Vec<DVec3>> = face
+                .contours
+                .iter()
+                .map(|c| c.iter().map(|&w| m.pos(w)).collect())
+                .collect();
+            let n = geom::face_normal(&pts)?.normalize();
+            let count: usize = pts.iter().map(Vec::len).sum();
+            Some((
+                n,
+                pts.iter().flatten().copied().sum::<DVec3>() / count as f64,
+            ))
+        })
+    }
+
     /// The faces among `among` (indices into `faces`) that `p` rests
     /// inside: within `eps` of the plane, inside the contours by more than
     /// `eps`; faces for which `skip` holds are not tried, nor those for
@@ -869,25 +888,11 @@ impl FacePlanes {
         skip_plane: impl Fn(DVec3, DVec3) -> bool,
     ) -> Vec<u32> {
         let mut out = Vec::new();
-        let pts = |face: &Face| -> Vec<Vec<DVec3>> {
-            face.contours
-                .iter()
-                .map(|c| c.iter().map(|&w| m.pos(w)).collect())
-                .collect()
-        };
         for &k in among {
             let face = &m.faces[self.faces[k as usize].idx()];
             // The plane first (cheap), the face's own test, then its
             // contours in its frame.
-            let Some((n, centre)) = *self.plane[k as usize].get_or_insert_with(|| {
-                let pts = pts(face);
-                let n = geom::face_normal(&pts)?.normalize();
-                let count: usize = pts.iter().map(Vec::len).sum();
-                Some((
-                    n,
-                    pts.iter().flatten().copied().sum::<DVec3>() / count as f64,
-                ))
-            }) else {
+            let Some((n, centre)) = self.plane_of(m, k) else {
                 continue;
             };
             if (p - centre).dot(n).abs() > eps || skip_plane(n, centre) || skip(face) {
@@ -897,7 +902,11 @@ impl FacePlanes {
                 .flat
                 .entry(k)
                 .or_insert_with(|| {
-                    let pts = pts(face);
+                    let pts: Vec<Vec<DVec3>> = face
+                        .contours
+                        .iter()
+                        .map(|c| c.iter().map(|&w| m.pos(w)).collect())
+                        .collect();
                     let frame = mesh_frame(&pts)?;
                     let c2 = pts
                         .iter()
@@ -909,20 +918,8 @@ impl FacePlanes {
             else {
                 continue;
             };
-            let q = frame.to_2d(p);
-            if geom::polygon::locate_2d(q, c2) != geom::polygon::Location::Inside {
-                continue;
-            }
-            let clear = c2.iter().all(|c| {
-                (0..c.len()).all(|i| {
-                    let (a, b) = (c[i], c[(i + 1) % c.len()]);
-                    let d = b - a;
-                    let t = ((q - a).dot(d) / d.length_squared().max(f64::MIN_POSITIVE))
-                        .clamp(0.0, 1.0);
-                    (a + d * t).distance(q) > eps
-                })
-            });
-            if clear {
+            // Inside by more than epsilon.
+            if geom::intersect::locate_eps(frame.to_2d(p), c2, eps) == geom::Location::Inside {
                 out.push(k);
             }
         }
@@ -976,19 +973,10 @@ fn resting_points(
     let mut found: Vec<(u32, u32)> = Vec::new();
     for k in 0..planes.faces.len() {
         let face = &m.faces[planes.faces[k].idx()];
-        let pts: Vec<Vec<DVec3>> = face
-            .contours
-            .iter()
-            .map(|c| c.iter().map(|&w| m.pos(w)).collect())
-            .collect();
-        let Some(n) = geom::face_normal(&pts) else {
+        let Some((n, centre)) = planes.plane_of(m, k as u32) else {
             continue;
         };
-        let n = n.normalize();
-        let count: usize = pts.iter().map(Vec::len).sum();
-        let centre = pts.iter().flatten().copied().sum::<DVec3>() / count as f64;
-        planes.plane[k] = Some(Some((n, centre)));
-        let (flo, fhi) = bbox(pts.iter().flatten().copied(), eps);
+        let (flo, fhi) = bbox(face.contours.iter().flatten().map(|&w| m.pos(w)), eps);
         let (a, b) = (key(flo), key(fhi));
         let cells = (b.0 - a.0 + 1) as f64 * (b.1 - a.1 + 1) as f64 * (b.2 - a.2 + 1) as f64;
         let mut cand: Vec<u32> = Vec::new();
@@ -2068,8 +2056,9 @@ fn jog_points(
     (out, stuck)
 }
 
-/// Below this angle between two faces folded onto each other along an
-/// edge, [`fold_points`] treats the fold as this one.
+/// Below this angle two faces folded onto each other along an edge lie on
+/// each other (coincident faces sharing it): [`fold_points`] leaves them
+/// to ugcopl and ugclean. It also sets how near an apex is looked at.
 const FOLD_MIN_DEG: f64 = 1.0;
 
 /// Points that keep a face's patches along a fold from lying on the other
@@ -2141,134 +2130,132 @@ fn fold_points(
     for (ti, i, h) in low {
         let t = &tris[ti];
         let p = t.map(pos);
+        let (a, b) = (t[i], t[(i + 1) % 3]);
+        let Some(&(oa, ob)) = borig.get(&(a.min(b), a.max(b))) else {
+            continue;
+        };
+        let (pa, pb, po) = (p[i], p[(i + 1) % 3], p[(i + 2) % 3]);
+        let l = (pb - pa).length();
+        // The face's inward direction at the edge, and the other faces'.
+        let d2 = (pb - pa) / l;
+        let mut n = d2.perp();
+        if n.dot(po - pa) < 0.0 {
+            n = -n;
+        }
+        let inward = to3(n).normalize_or_zero();
+        let dir = (m.pos(ob) - m.pos(oa)).normalize_or_zero();
+        let lo = edge_faces.partition_point(|e| (e.0, e.1) < (oa, ob));
+        let mut sin_fold: Option<f64> = None;
+        for &(_, _, g, ci, forward) in edge_faces[lo..]
+            .iter()
+            .take_while(|e| (e.0, e.1) == (oa, ob))
         {
-            let (a, b) = (t[i], t[(i + 1) % 3]);
-            let Some(&(oa, ob)) = borig.get(&(a.min(b), a.max(b))) else {
+            if g == f {
                 continue;
-            };
-            let (pa, pb, po) = (p[i], p[(i + 1) % 3], p[(i + 2) % 3]);
-            let l = (pb - pa).length();
-            // The face's inward direction at the edge, and the other faces'.
-            let d2 = (pb - pa) / l;
-            let mut n = d2.perp();
-            if n.dot(po - pa) < 0.0 {
-                n = -n;
             }
-            let inward = to3(n).normalize_or_zero();
-            let dir = (m.pos(ob) - m.pos(oa)).normalize_or_zero();
-            let lo = edge_faces.partition_point(|e| (e.0, e.1) < (oa, ob));
-            let mut sin_fold: Option<f64> = None;
-            for &(_, _, g, ci, forward) in edge_faces[lo..]
-                .iter()
-                .take_while(|e| (e.0, e.1) == (oa, ob))
-            {
-                if g == f {
-                    continue;
-                }
-                let gface = &m.faces[g.idx()];
-                // Its normal and its contours' signed areas about it.
-                let Some((gn, area)) = cx
-                    .fold_normals
-                    .borrow_mut()
-                    .entry(g)
-                    .or_insert_with(|| {
-                        let pts: Vec<Vec<DVec3>> = gface
-                            .contours
-                            .iter()
-                            .map(|c| c.iter().map(|&v| m.pos(v)).collect())
-                            .collect();
-                        let gn = geom::face_normal(&pts)?.normalize();
-                        let gframe = Frame::new(DVec3::ZERO, gn);
-                        let areas = pts
-                            .iter()
-                            .map(|c| {
-                                let c2: Vec<DVec2> = c.iter().map(|&q| gframe.to_2d(q)).collect();
-                                geom::signed_area_2d(&c2)
-                            })
-                            .collect::<Vec<f64>>();
-                        Some((gn, areas))
-                    })
-                    .as_ref()
-                    .map(|(n, areas)| (*n, areas[ci as usize]))
-                else {
-                    continue;
-                };
-                // Where g walks the edge (`forward`: from the lower vertex),
-                // and on which side its inside is: left of the walk for an
-                // outer contour walked counter-clockwise about its normal
-                // or a hole walked clockwise.
-                if area == 0.0 {
-                    continue;
-                }
-                let walk = if forward { dir } else { -dir };
-                let mut gin = gn.cross(walk);
-                if (ci == 0) != (area > 0.0) {
-                    gin = -gin;
-                }
-                // Folded back by under 30° (the overlap test takes faces
-                // within about 26° of parallel as coplanar).
-                if gin.dot(inward) <= 0.0 {
-                    continue;
-                }
-                // Under 1° the faces lie on each other (coincident faces
-                // sharing an edge): no point across mends that, and such
-                // overlaps are ugcopl's and ugclean's.
-                let s = gin.cross(inward).length();
-                if s < min_sin {
-                    continue;
-                }
-                if s >= 0.5 {
-                    continue;
-                }
-                if h * s >= 3.0 * eps {
-                    continue;
-                }
-                let own = key.get_or_insert_with(|| {
-                    let mut k: Vec<VertexId> = m.faces[f.idx()]
+            let gface = &m.faces[g.idx()];
+            // Its normal and its contours' signed areas about it.
+            let Some((gn, area)) = cx
+                .fold_normals
+                .borrow_mut()
+                .entry(g)
+                .or_insert_with(|| {
+                    let pts: Vec<Vec<DVec3>> = gface
                         .contours
                         .iter()
-                        .flatten()
-                        .copied()
+                        .map(|c| c.iter().map(|&v| m.pos(v)).collect())
                         .collect();
-                    k.sort_unstable();
-                    k.dedup();
-                    k
-                });
-                let mut gk: Vec<VertexId> = gface.contours.iter().flatten().copied().collect();
-                gk.sort_unstable();
-                gk.dedup();
-                if gk == *own {
-                    continue;
-                }
-                sin_fold = Some(sin_fold.map_or(s, |x: f64| x.min(s)));
-            }
-            let Some(s) = sin_fold else {
+                    let gn = geom::face_normal(&pts)?.normalize();
+                    let gframe = Frame::new(DVec3::ZERO, gn);
+                    let areas = pts
+                        .iter()
+                        .map(|c| {
+                            let c2: Vec<DVec2> = c.iter().map(|&q| gframe.to_2d(q)).collect();
+                            geom::signed_area_2d(&c2)
+                        })
+                        .collect::<Vec<f64>>();
+                    Some((gn, areas))
+                })
+                .as_ref()
+                .map(|(n, areas)| (*n, areas[ci as usize]))
+            else {
                 continue;
             };
+            // Where g walks the edge (`forward`: from the lower vertex),
+            // and on which side its inside is: left of the walk for an
+            // outer contour walked counter-clockwise about its normal
+            // or a hole walked clockwise.
+            if area == 0.0 {
+                continue;
+            }
+            let walk = if forward { dir } else { -dir };
+            let mut gin = gn.cross(walk);
+            if (ci == 0) != (area > 0.0) {
+                gin = -gin;
+            }
+            // Folded back by under 30° (the overlap test takes faces
+            // within about 26° of parallel as coplanar).
+            if gin.dot(inward) <= 0.0 {
+                continue;
+            }
+            // Under 1° the faces lie on each other (coincident faces
+            // sharing an edge): no point across mends that, and such
+            // overlaps are ugcopl's and ugclean's.
+            let s = gin.cross(inward).length();
+            if s < min_sin {
+                continue;
+            }
+            if s >= 0.5 {
+                continue;
+            }
             if h * s >= 3.0 * eps {
                 continue;
             }
-            let target = 6.0 * eps / s;
-            let clearance = |q: DVec2| clearance(q, segs, seg_index, target.max(64.0 * eps), None);
-            let inside = |q: DVec2| inside_of(q, segs);
-            let breaks = |q: DVec2| geom::incircle(pa, pb, po, q) > 0;
-            let mut best: Option<(bool, f64, DVec2)> = None;
-            for along in [0.5, 0.35, 0.65, 0.2, 0.8] {
-                for k in [1.0, 1.5, 2.0, 3.0] {
-                    let q = pa + (pb - pa) * along + n * (k * target);
-                    let score = width([pa, pb, q], eps).min(clearance(q));
-                    let b = breaks(q) && score > eps;
-                    if best.is_none_or(|(bb, sc, _)| (b, score) > (bb, sc)) && inside(q) {
-                        best = Some((b, score, q));
-                    }
+            let own = key.get_or_insert_with(|| {
+                let mut k: Vec<VertexId> = m.faces[f.idx()]
+                    .contours
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .collect();
+                k.sort_unstable();
+                k.dedup();
+                k
+            });
+            let mut gk: Vec<VertexId> = gface.contours.iter().flatten().copied().collect();
+            gk.sort_unstable();
+            gk.dedup();
+            if gk == *own {
+                continue;
+            }
+            sin_fold = Some(sin_fold.map_or(s, |x: f64| x.min(s)));
+        }
+        let Some(s) = sin_fold else {
+            continue;
+        };
+        if h * s >= 3.0 * eps {
+            continue;
+        }
+        let target = 6.0 * eps / s;
+        let clearance = |q: DVec2| clearance(q, segs, seg_index, target.max(64.0 * eps), None);
+        let inside = |q: DVec2| inside_of(q, segs);
+        let breaks = |q: DVec2| geom::incircle(pa, pb, po, q) > 0;
+        let mut best: Option<(bool, f64, DVec2)> = None;
+        for along in [0.5, 0.35, 0.65, 0.2, 0.8] {
+            for k in [1.0, 1.5, 2.0, 3.0] {
+                let q = pa + (pb - pa) * along + n * (k * target);
+                let score = width([pa, pb, q], eps).min(clearance(q));
+                let b = breaks(q) && score > eps;
+                if best.is_none_or(|(bb, sc, _)| (b, score) > (bb, sc)) && inside(q) {
+                    best = Some((b, score, q));
                 }
             }
-            if let Some((_, score, q)) = best
-                && score > eps
-                && out.iter().all(|o| o.distance(q) > 2.0 * eps)
-            {
-                out.push(q);
-            }
+        }
+        if let Some((_, score, q)) = best
+            && score > eps
+            && out.iter().all(|o| o.distance(q) > 2.0 * eps)
+        {
+            out.push(q);
         }
     }
     out
