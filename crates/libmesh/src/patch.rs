@@ -859,11 +859,7 @@ impl FacePlanes {
     fn plane_of(&mut self, m: &Model, k: u32) -> Option<(DVec3, DVec3)> {
         let face = &m.faces[self.faces[k as usize].idx()];
         *self.plane[k as usize].get_or_insert_with(|| {
-            let pts: Vec<Vec<DVec3>> = face
-                .contours
-                .iter()
-                .map(|c| c.iter().map(|&w| m.pos(w)).collect())
-                .collect();
+            let pts = face_points(m, face);
             let n = geom::face_normal(&pts)?.normalize();
             let count: usize = pts.iter().map(Vec::len).sum();
             Some((
@@ -902,11 +898,7 @@ impl FacePlanes {
                 .flat
                 .entry(k)
                 .or_insert_with(|| {
-                    let pts: Vec<Vec<DVec3>> = face
-                        .contours
-                        .iter()
-                        .map(|c| c.iter().map(|&w| m.pos(w)).collect())
-                        .collect();
+                    let pts = face_points(m, face);
                     let frame = mesh_frame(&pts)?;
                     let c2 = pts
                         .iter()
@@ -1050,6 +1042,14 @@ fn resting_points(
         }
     }
     out
+}
+
+/// A face's contours as positions.
+fn face_points(m: &Model, face: &Face) -> Vec<Vec<DVec3>> {
+    face.contours
+        .iter()
+        .map(|c| c.iter().map(|&v| m.pos(v)).collect())
+        .collect()
 }
 
 /// A boundary segment (its ends, lower first) and the contour edge it is
@@ -1292,11 +1292,7 @@ fn mesh_face(
 ) -> Option<Vec<Vec<Vec<VertexId>>>> {
     let m = cx.m;
     let face = &m.faces[f.idx()];
-    let pts: Vec<Vec<DVec3>> = face
-        .contours
-        .iter()
-        .map(|c| c.iter().map(|&v| m.pos(v)).collect())
-        .collect();
+    let pts = face_points(m, face);
     let n = geom::face_normal(&pts)?;
     let frame = mesh_frame(&pts)?;
     let len = cx.opts.len;
@@ -2160,11 +2156,7 @@ fn fold_points(
                 .borrow_mut()
                 .entry(g)
                 .or_insert_with(|| {
-                    let pts: Vec<Vec<DVec3>> = gface
-                        .contours
-                        .iter()
-                        .map(|c| c.iter().map(|&v| m.pos(v)).collect())
-                        .collect();
+                    let pts = face_points(m, gface);
                     let gn = geom::face_normal(&pts)?.normalize();
                     let gframe = Frame::new(DVec3::ZERO, gn);
                     let areas = pts
