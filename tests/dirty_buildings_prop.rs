@@ -307,7 +307,8 @@ fn one_placed(seed: u64, placed: bool) -> Vec<String> {
     };
     match libmesh::patch::cut(&cleaned, popts(0.7 * scale)) {
         Err(e) => problems.push(format!("ugcut: {e}")),
-        Ok((patches, _)) => {
+        Ok((patches, st)) => {
+            replayed_as_meshed(&cleaned, popts(0.7 * scale), &patches, &st, &mut problems);
             let r = check::check(&patches, eps);
             for cat in ["nonpatch", "tvertex", "degenerate", "intersect", "overlap"] {
                 if r.count(cat) > 0 {
@@ -324,7 +325,8 @@ fn one_placed(seed: u64, placed: bool) -> Vec<String> {
     let (i, _) = clean::isect::isect(&g, eps).unwrap();
     match libmesh::patch::cut(&i, popts(2.0 * scale)) {
         Err(e) => problems.push(format!("user pipeline ugcut: {e}")),
-        Ok((patches, _)) => {
+        Ok((patches, st)) => {
+            replayed_as_meshed(&i, popts(2.0 * scale), &patches, &st, &mut problems);
             let r = check::check(&patches, eps);
             if r.count("nonpatch") > 0 {
                 problems.push(format!("user pipeline: nonpatch {}", r.count("nonpatch")));
@@ -335,6 +337,28 @@ fn one_placed(seed: u64, placed: bool) -> Vec<String> {
         }
     }
     problems
+}
+
+/// Where ugcut met joins and meshed again, replaying the faces they did
+/// not reach: the same output as meshing them all again.
+fn replayed_as_meshed(
+    m: &Model,
+    opts: libmesh::patch::Options,
+    out: &Model,
+    st: &libmesh::patch::Stats,
+    problems: &mut Vec<String>,
+) {
+    if st.joined == 0 {
+        return;
+    }
+    match libmesh::patch::cut_without_reuse(m, opts) {
+        Ok((fresh, _)) if ug::write_string(&fresh) == ug::write_string(out) => {}
+        Ok(_) => problems.push(format!(
+            "ugcut -l {}: replaying {} faces gave another output than meshing them again",
+            opts.len, st.replayed
+        )),
+        Err(e) => problems.push(format!("ugcut without replay: {e}")),
+    }
 }
 
 fn run(seeds: Vec<u64>) {

@@ -711,3 +711,48 @@ fn no_foot_is_placed_across_a_corner_from_its_short_edge() {
         1e-5,
     );
 }
+
+/// After a join the model is meshed again, but the faces the join changed
+/// nothing for are replayed from the first round (libmesh::patch's
+/// `reuse`): the output is the same, byte for byte, as meshing every face
+/// again. The column strip of `a_short_edge_no_triangle_can_take_has_its_ends_joined`
+/// with unnamed tiles far from it (named by their index, which the join
+/// may shift); the column's faces at the join are meshed again.
+#[test]
+fn faces_a_join_does_not_reach_are_replayed_unchanged() {
+    let mut src = std::fs::read_to_string(fixture("cut/short-foot-of-a-column-strip.ug")).unwrap();
+    for i in 0..6 {
+        for j in 0..4 {
+            let (x, y) = (20.0 + i as f64 * 1.3, 10.0 + j as f64 * 1.1);
+            src += &format!(
+                "v t{i}_{j}a {x} {y} 0; v t{i}_{j}b {} {y} 0; v t{i}_{j}c {} {} 0; v t{i}_{j}d {x} {} 0;\n\
+                 f (t{i}_{j}a t{i}_{j}b t{i}_{j}c t{i}_{j}d) ceiling;\n",
+                x + 1.2,
+                x + 1.2,
+                y + 1.0,
+                y + 1.0
+            );
+        }
+    }
+    let model = ug::parse(src.as_bytes(), "<test>").unwrap().model;
+    for len in [2.0, 0.7, 0.3] {
+        let opts = libmesh::patch::Options {
+            len,
+            eps: 4.463525145085003e-5,
+            angle: 25.0,
+            quads: true,
+        };
+        let (out, st) = libmesh::patch::cut(&model, opts).unwrap();
+        let (fresh, st2) = libmesh::patch::cut_without_reuse(&model, opts).unwrap();
+        assert!(st.joined >= 1, "len {len}: no join");
+        assert!(st.replayed >= 24, "len {len}: {} replayed", st.replayed);
+        assert!(st.remeshed >= 1, "len {len}: {} meshed again", st.remeshed);
+        assert_eq!(st2.replayed, 0);
+        assert_eq!(
+            ug::write_string(&out),
+            ug::write_string(&fresh),
+            "len {len}: replayed faces differ"
+        );
+        assert_eq!(st.patches, st2.patches);
+    }
+}

@@ -55,6 +55,11 @@ use spade::{
 use ug::{Face, FaceId, Item, Model, Vertex, VertexId};
 use winged::pieces::replace;
 
+mod reuse;
+
+/// A face's patches: each a list of contours (one, for a patch).
+type Patches = Vec<Vec<Vec<VertexId>>>;
+
 #[derive(Clone, Copy, Debug)]
 pub struct Options {
     /// Desired patch edge length (model units).
@@ -100,6 +105,10 @@ pub struct Stats {
     /// Faces meshed by the plain triangulation because the grid and the
     /// refinement could not be fitted (triangles of poorer shape).
     pub plain: Vec<String>,
+    /// After joins, faces meshed again, and faces replayed from the round
+    /// before (the joins changed nothing they depend on; see [`cut`]).
+    pub remeshed: usize,
+    pub replayed: usize,
     /// Vertices of other faces resting inside a face (within epsilon of
     /// its plane, more than epsilon inside its contours), made corners of
     /// its patches (see [`resting_points`]).
@@ -517,12 +526,12 @@ struct Ctx<'m> {
     resting: FxHashMap<FaceId, Vec<VertexId>>,
     /// The faces, for asking whether a division point rests inside one.
     planes: FacePlanes,
-    /// Every face's contour edges, (lower vertex, higher, face), sorted:
-    /// the faces across an edge, for [`fold_points`].
-    edge_faces: std::cell::OnceCell<Vec<EdgeUse>>,
     /// Faces' unit normals and their contours' signed areas about them,
     /// made when [`fold_points`] first asks.
     fold_normals: std::cell::RefCell<FxHashMap<FaceId, Option<FoldNormal>>>,
+    /// While a face is meshed, what it does to the shared state (see
+    /// [`reuse`]).
+    trace: Option<reuse::Trace>,
 }
 
 impl Ctx<'_> {
@@ -541,6 +550,16 @@ impl Ctx<'_> {
             color: None,
         });
         id
+    }
+
+    /// The `k`th vertex of face `fname`'s own (not a division point),
+    /// named `fname.vk`.
+    fn inner_vertex(&mut self, fname: &str, k: usize, pos: DVec3) -> VertexId {
+        let v = self.new_vertex(format!("{fname}.v{k}"), pos);
+        if let Some(t) = &mut self.trace {
+            t.vertices.push((k as u32, v));
+        }
+        v
     }
 
     fn pos(&self, v: VertexId) -> DVec3 {
@@ -679,6 +698,18 @@ pub fn segments(length: f64, len: f64) -> usize {
 /// [`prepare`]). Fails only if a face could not be triangulated at all,
 /// which the preparation is meant to make impossible.
 pub fn cut(m: &Model, opts: Options) -> Result<(Model, Stats), String> {
+    cut_rounds(m, opts, true)
+}
+
+/// [`cut`] meshing every face again in every round, where [`cut`] replays
+/// the faces that the joins did not change (see [`reuse`]): the same
+/// output, for tests to compare.
+#[doc(hidden)]
+pub fn cut_without_reuse(m: &Model, opts: Options) -> Result<(Model, Stats), String> {
+    cut_rounds(m, opts, false)
+}
+
+fn cut_rounds(m: &Model, opts: Options, replay: bool) -> Result<(Model, Stats), String> {
     let mut stats = Stats {
         min_edge: f64::INFINITY,
         worst_angle: 180.0,
@@ -687,9 +718,20 @@ pub fn cut(m: &Model, opts: Options) -> Result<(Model, Stats), String> {
     let mut model = prepare(m, opts.eps, &mut stats);
     // Joins asked for make the model prepared and meshed again; each round
     // can ask for more where the first ones moved vertices (three rounds
-    // at most).
+    // at most). Faces the joins did not change are replayed from the round
+    // before ([`reuse`]).
+    let mut memo: Option<reuse::Memo> = None;
+    let mut before: Option<Model> = None;
     for round in 0.. {
-        let (out, done, mut joins) = mesh_all(&model, opts, stats.clone())?;
+        // (The model before the joins is dropped once compared.)
+        let again = match (&memo, before.take()) {
+            (Some(memo), Some(before)) if replay => {
+                reuse::Reuse::new(memo, &before, &model, opts.eps)
+            }
+            _ => None,
+        };
+        let (out, done, mut joins, next) = mesh_all(&model, opts, stats.clone(), again.as_ref())?;
+        drop(again);
         // A boundary edge a little longer than epsilon that no triangle
         // can take without being narrower than epsilon (its face is too
         // narrow there for an apex far enough across): its ends are
@@ -707,7 +749,9 @@ pub fn cut(m: &Model, opts: Options) -> Result<(Model, Stats), String> {
         if joins.is_empty() || round == 3 {
             return Ok((out, done));
         }
-        model = prepare_joining(&model, opts.eps, &mut stats, &joins);
+        let joined = prepare_joining(&model, opts.eps, &mut stats, &joins);
+        memo = Some(next);
+        before = Some(std::mem::replace(&mut model, joined));
     }
     unreachable!()
 }
@@ -1059,37 +1103,49 @@ type SegmentOf = ((VertexId, VertexId), (VertexId, VertexId));
 /// A face's unit normal and its contours' signed areas about it.
 type FoldNormal = (DVec3, Vec<f64>);
 
-/// A face's use of an edge: (lower vertex, higher vertex, the face, its
-/// contour, whether it walks the edge from the lower vertex).
-type EdgeUse = (VertexId, VertexId, FaceId, u32, bool);
-
-/// Every face's contour edges as [`EdgeUse`]s, sorted.
-fn edge_uses(m: &Model) -> Vec<EdgeUse> {
-    let mut e: Vec<EdgeUse> = m
-        .top_faces()
-        .flat_map(|f| {
-            m.faces[f.idx()]
-                .contours
-                .iter()
-                .enumerate()
-                .flat_map(move |(ci, c)| {
-                    (0..c.len()).map(move |i| {
-                        let (a, b) = (c[i], c[(i + 1) % c.len()]);
-                        (a.min(b), a.max(b), f, ci as u32, a < b)
-                    })
-                })
-        })
-        .collect();
-    e.sort_unstable();
-    e.dedup_by_key(|x| (x.0, x.1, x.2));
-    e
+/// The faces using the contour edge `(a, b)` (`a < b`), each once: (the
+/// face, its first contour with the edge, whether that contour walks it
+/// from `a`), in face order. Found among the faces at `a` and `b`
+/// ([`FacePlanes::around`]), so no model-wide edge table is built for the
+/// few edges [`fold_points`] asks about.
+fn edge_uses(m: &Model, planes: &FacePlanes, a: VertexId, b: VertexId) -> Vec<(FaceId, u32, bool)> {
+    let (fa, fb) = (planes.around(a), planes.around(b));
+    let mut out = Vec::new();
+    for &k in fa {
+        if fb.binary_search(&k).is_err() {
+            continue;
+        }
+        let f = planes.faces[k as usize];
+        let mut first: Option<(u32, bool)> = None;
+        for (ci, c) in m.faces[f.idx()].contours.iter().enumerate() {
+            for i in 0..c.len() {
+                let (x, y) = (c[i], c[(i + 1) % c.len()]);
+                if (x.min(y), x.max(y)) == (a, b) {
+                    let u = (ci as u32, x < y);
+                    first = Some(first.map_or(u, |o: (u32, bool)| o.min(u)));
+                }
+            }
+        }
+        if let Some((ci, forward)) = first {
+            out.push((f, ci, forward));
+        }
+    }
+    out.sort_unstable();
+    out
 }
 
 /// Vertex joins, (from, to).
 type Joins = Vec<(VertexId, VertexId)>;
 
-/// The meshing of a prepared model; also the joins [`jog_points`] asked for.
-fn mesh_all(m: &Model, opts: Options, mut stats: Stats) -> Result<(Model, Stats, Joins), String> {
+/// The meshing of a prepared model; also the joins [`jog_points`] asked
+/// for and what the next round may replay ([`reuse`]). Faces that `reuse`
+/// allows are replayed from the last round instead of meshed.
+fn mesh_all(
+    m: &Model,
+    opts: Options,
+    mut stats: Stats,
+    reuse: Option<&reuse::Reuse<'_>>,
+) -> Result<(Model, Stats, Joins, reuse::Memo), String> {
     let (edges, start, ends) = edges_at_vertices(m);
     let mut planes = FacePlanes::new(m);
     let resting = resting_points(&mut planes, m, opts.eps, (&edges, &start, &ends));
@@ -1118,9 +1174,10 @@ fn mesh_all(m: &Model, opts: Options, mut stats: Stats) -> Result<(Model, Stats,
         stuck: Vec::new(),
         resting,
         planes,
-        edge_faces: std::cell::OnceCell::new(),
         fold_normals: Default::default(),
+        trace: None,
     };
+    let mut memo = reuse::Memo::default();
     stats.resting = cx.resting.values().map(Vec::len).sum();
     let mut out = Model {
         materials: m.materials.clone(),
@@ -1131,7 +1188,6 @@ fn mesh_all(m: &Model, opts: Options, mut stats: Stats) -> Result<(Model, Stats,
     };
     let mut emitted = m.vertices.len(); // vertices of cx.vertices already written
     // A face's sorted vertices → (its normal, its patches).
-    type Patches = Vec<Vec<Vec<VertexId>>>;
     let mut twins: FxHashMap<Vec<VertexId>, (Option<DVec3>, Patches)> = FxHashMap::default();
     let mut edge_sum = 0.0;
     let mut edge_count = 0usize;
@@ -1183,20 +1239,47 @@ fn mesh_all(m: &Model, opts: Options, mut stats: Stats) -> Result<(Model, Stats,
                         p
                     }
                     None => {
-                        let p = match mesh_face(&mut cx, *f, &mut stats, true) {
-                            Some(p) => p,
-                            None => match mesh_face(&mut cx, *f, &mut stats, false) {
-                                Some(p) => {
+                        let (p, rec) = match reuse.and_then(|r| r.replay(&mut cx, *f, &mut stats)) {
+                            Some((p, rec)) => {
+                                stats.replayed += 1;
+                                if rec.plain() {
                                     stats.plain.push(label.clone());
-                                    p
                                 }
-                                None => {
-                                    return Err(format!(
-                                        "face {label} could not be triangulated (please report this model)"
-                                    ));
+                                (p, rec)
+                            }
+                            None => {
+                                if reuse.is_some() {
+                                    stats.remeshed += 1;
                                 }
-                            },
+                                cx.trace = Some(reuse::Trace::default());
+                                let (cells, stuck) = (stats.grid_cells, cx.stuck.len());
+                                let (p, plain) = match mesh_face(&mut cx, *f, &mut stats, true) {
+                                    Some(p) => (p, false),
+                                    None => match mesh_face(&mut cx, *f, &mut stats, false) {
+                                        Some(p) => {
+                                            stats.plain.push(label.clone());
+                                            (p, true)
+                                        }
+                                        None => {
+                                            return Err(format!(
+                                                "face {label} could not be triangulated (please report this model)"
+                                            ));
+                                        }
+                                    },
+                                };
+                                let trace = cx.trace.take().unwrap_or_default();
+                                let rec = reuse::Record::new(
+                                    trace,
+                                    &p,
+                                    stats.grid_cells - cells,
+                                    plain,
+                                    cx.resting.get(f).cloned().unwrap_or_default(),
+                                    cx.stuck.len() > stuck,
+                                );
+                                (p, rec)
+                            }
                         };
+                        memo.add(*f, rec);
                         twins.entry(key).or_insert((normal, p.clone()));
                         p
                     }
@@ -1248,6 +1331,11 @@ fn mesh_all(m: &Model, opts: Options, mut stats: Stats) -> Result<(Model, Stats,
         }
     }
     flush_vertices(&cx, &mut out, &mut emitted);
+    memo.finish(
+        std::mem::take(&mut cx.div.map),
+        cx.vertices.iter().map(|v| v.pos).collect(),
+        m.vertices.len(),
+    );
     out.vertices = cx.vertices;
     stats.mean_edge = if edge_count > 0 {
         edge_sum / edge_count as f64
@@ -1260,7 +1348,7 @@ fn mesh_all(m: &Model, opts: Options, mut stats: Stats) -> Result<(Model, Stats,
     let mut stuck = cx.stuck;
     stuck.sort_unstable();
     stuck.dedup();
-    Ok((out, stats, stuck))
+    Ok((out, stats, stuck, memo))
 }
 
 /// Writes vertex statements for the vertices created since the last call.
@@ -1404,7 +1492,7 @@ fn mesh_face(
             let v = match near.first() {
                 Some(&k) => bpoints[k as usize].1,
                 None => {
-                    let v = cx.new_vertex(format!("{fname}.v{next_inner}"), frame.to_3d(p));
+                    let v = cx.inner_vertex(&fname, *next_inner, frame.to_3d(p));
                     *next_inner += 1;
                     v
                 }
@@ -1539,10 +1627,7 @@ fn mesh_face(
             .map(|v| v.position())
             .collect();
         for p in added {
-            let v = cx.new_vertex(
-                format!("{fname}.v{next_inner}"),
-                frame.to_3d(DVec2::new(p.x, p.y)),
-            );
+            let v = cx.inner_vertex(&fname, next_inner, frame.to_3d(DVec2::new(p.x, p.y)));
             next_inner += 1;
             ids.push(v);
         }
@@ -1631,7 +1716,7 @@ fn mesh_face(
         let ids: Vec<VertexId> = steiner
             .iter()
             .map(|&q| {
-                let v = cx.new_vertex(format!("{fname}.v{next_inner}"), frame.to_3d(q));
+                let v = cx.inner_vertex(&fname, next_inner, frame.to_3d(q));
                 next_inner += 1;
                 v
             })
@@ -2122,7 +2207,6 @@ fn fold_points(
     }
     let borig: FxHashMap<(VertexId, VertexId), (VertexId, VertexId)> =
         borig.iter().copied().collect();
-    let edge_faces = cx.edge_faces.get_or_init(|| edge_uses(m));
     for (ti, i, h) in low {
         let t = &tris[ti];
         let p = t.map(pos);
@@ -2140,12 +2224,8 @@ fn fold_points(
         }
         let inward = to3(n).normalize_or_zero();
         let dir = (m.pos(ob) - m.pos(oa)).normalize_or_zero();
-        let lo = edge_faces.partition_point(|e| (e.0, e.1) < (oa, ob));
         let mut sin_fold: Option<f64> = None;
-        for &(_, _, g, ci, forward) in edge_faces[lo..]
-            .iter()
-            .take_while(|e| (e.0, e.1) == (oa, ob))
-        {
+        for (g, ci, forward) in edge_uses(m, &cx.planes, oa, ob) {
             if g == f {
                 continue;
             }
