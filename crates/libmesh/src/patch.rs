@@ -156,17 +156,89 @@ pub fn mesh_frame(pts: &[Vec<DVec3>]) -> Option<Frame> {
 /// contours in its plane (see the module documentation) and drops faces
 /// without area, recording each in `stats`.
 pub fn prepare(m: &Model, eps: f64, stats: &mut Stats) -> Model {
-    prepare_joining(m, eps, stats, &[])
+    prepare_joining(m, eps, stats, &[], false)
+}
+
+/// Faces whose bounding box comes within this many epsilons of an edge a
+/// join changes are prepared again after the joins (see [`join_region`]).
+const JOIN_REACH: f64 = 64.0;
+
+/// The faces (and their vertices) that joining `joins` in prepared model
+/// `m` can change: those whose bounding box comes within [`JOIN_REACH`]
+/// epsilon of an edge at a joined vertex, taken from both its old and its
+/// new end. Welding, splitting, tents and repairs after the joins reach
+/// only a few epsilons from where the joins moved edges (`m` is a fixed
+/// point of [`prepare`] elsewhere: preparing the 100k-face building's
+/// chain output or its user's pipeline output again gives the same bytes).
+fn join_region(m: &Model, eps: f64, joins: &[(VertexId, VertexId)]) -> winged::weld::Region {
+    let nv = m.vertices.len();
+    let mut partner: FxHashMap<VertexId, Vec<VertexId>> = FxHashMap::default();
+    for &(a, b) in joins {
+        if a.idx() < nv && b.idx() < nv {
+            partner.entry(a).or_default().push(b);
+            partner.entry(b).or_default().push(a);
+        }
+    }
+    // Boxes of the edges at joined vertices, each stretched to the other
+    // end of its join.
+    let mut boxes: Vec<(DVec3, DVec3)> = Vec::new();
+    for f in m.top_faces() {
+        for c in &m.faces[f.idx()].contours {
+            let n = c.len();
+            for i in 0..n {
+                let Some(others) = partner.get(&c[i]) else {
+                    continue;
+                };
+                for w in [c[(i + n - 1) % n], c[(i + 1) % n]] {
+                    let pts = std::iter::once(m.pos(c[i]))
+                        .chain(std::iter::once(m.pos(w)))
+                        .chain(others.iter().map(|&o| m.pos(o)));
+                    boxes.push(bbox(pts, JOIN_REACH * eps));
+                }
+            }
+        }
+    }
+    for (&a, others) in &partner {
+        boxes.push(bbox(
+            std::iter::once(m.pos(a)).chain(others.iter().map(|&o| m.pos(o))),
+            JOIN_REACH * eps,
+        ));
+    }
+    let index = BoxIndex::new(
+        boxes
+            .iter()
+            .enumerate()
+            .map(|(k, &(lo, hi))| (lo, hi, k as u32)),
+    );
+    let mut faces = vec![false; m.faces.len()];
+    let mut verts = vec![false; nv];
+    for f in m.top_faces() {
+        let face = &m.faces[f.idx()];
+        let (lo, hi) = bbox(face.contours.iter().flatten().map(|&v| m.pos(v)), 0.0);
+        if !index.query(lo, hi).is_empty() {
+            faces[f.idx()] = true;
+            for &v in face.contours.iter().flatten() {
+                verts[v.idx()] = true;
+            }
+        }
+    }
+    winged::weld::Region::new(faces, verts)
 }
 
 /// [`prepare`], first joining each pair `(from, to)` of `joins` (vertices
-/// of `m`) as [`winged::weld::join_vertices`] does.
+/// of `m`) as [`winged::weld::join_vertices`] does. `local`: `m` is
+/// prepared already, and only the faces the joins can reach are prepared
+/// again ([`join_region`]).
 fn prepare_joining(
     m: &Model,
     eps: f64,
     stats: &mut Stats,
     joins: &[(VertexId, VertexId)],
+    local: bool,
 ) -> Model {
+    let region = (local && !joins.is_empty() && eps.is_finite() && eps > 0.0)
+        .then(|| join_region(m, eps, joins));
+    let region = region.as_ref();
     let labels = labels(m);
     let label = |f: FaceId| {
         labels
@@ -183,30 +255,33 @@ fn prepare_joining(
         }
     }
     if !joins.is_empty() {
-        let (joined, dropped) = winged::weld::join_vertices(&mut mesh, joins, eps);
+        let (joined, dropped) = winged::weld::join_vertices_in(&mut mesh, joins, eps, region);
         stats.joined += joined;
         stats
             .dropped
             .extend(dropped.into_iter().map(|(f, why)| (label(f), why)));
     }
-    let (welded, dropped) = winged::weld::merge_vertices(&mut mesh, eps);
+    let (welded, dropped) = winged::weld::merge_vertices_in(&mut mesh, eps, region);
     stats.welded += welded;
     stats
         .dropped
         .extend(dropped.into_iter().map(|(f, why)| (label(f), why)));
-    stats.tvertices += winged::weld::split_edges(&mut mesh, eps).inserted;
+    stats.tvertices += winged::weld::split_edges_in(&mut mesh, eps, region).inserted;
     // Tents (a vertex within epsilon of the short chord between its
     // neighbours) cannot be meshed without a sliver: the vertex joins the
     // nearer neighbour, and the edges that changed are split again.
-    let (tents, dropped) = winged::weld::collapse_tents(&mut mesh, eps);
+    let (tents, dropped) = winged::weld::collapse_tents_in(&mut mesh, eps, region);
     if tents > 0 {
         stats.welded += tents;
         stats
             .dropped
             .extend(dropped.into_iter().map(|(f, why)| (label(f), why)));
-        stats.tvertices += winged::weld::split_edges(&mut mesh, eps).inserted;
+        stats.tvertices += winged::weld::split_edges_in(&mut mesh, eps, region).inserted;
     }
-    let faces: Vec<FaceId> = mesh.faces().collect();
+    let faces: Vec<FaceId> = mesh
+        .faces()
+        .filter(|&f| region.is_none_or(|r| r.has_face(f)))
+        .collect();
     for f in faces {
         let name = mesh
             .face(f)
@@ -230,7 +305,14 @@ fn prepare_joining(
     }
     // Every face sound in the frame it is meshed in (see `mesh_frame`).
     let mut settled = winged::pieces::Settled::default();
-    winged::pieces::repair_all(&mut mesh, eps, &mesh_frame, &|_| false, &mut settled);
+    winged::pieces::repair_all_in(
+        &mut mesh,
+        eps,
+        &mesh_frame,
+        &|_| false,
+        &mut settled,
+        region,
+    );
     stats.tvertices += settled.tvertices;
     for f in &settled.repaired {
         stats.repaired.push((label(*f), 0));
@@ -513,12 +595,45 @@ fn feet_and_thin(m: &Model, eps: f64) -> (Feet, Thin) {
     (out, thin)
 }
 
+/// A set of names, kept as 64-bit SipHash values (with fixed keys, so the
+/// same every run): a name is new when its hash is. Two different names
+/// with one hash would only make the second take the next free suffix;
+/// no name is ever given twice. A set of the strings themselves cost
+/// about 100 MB and a second of copying and freeing on the user's 100k
+/// pipeline.
+#[derive(Default)]
+struct Names(FxHashSet<u64>);
+
+impl Names {
+    fn hash(name: &str) -> u64 {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::hash::DefaultHasher::new();
+        name.hash(&mut h);
+        h.finish()
+    }
+
+    fn contains(&self, name: &str) -> bool {
+        self.0.contains(&Names::hash(name))
+    }
+
+    /// Adds `name`; false if it was there.
+    fn insert(&mut self, name: &str) -> bool {
+        self.0.insert(Names::hash(name))
+    }
+}
+
+impl<'a> FromIterator<&'a str> for Names {
+    fn from_iter<I: IntoIterator<Item = &'a str>>(it: I) -> Names {
+        Names(it.into_iter().map(Names::hash).collect())
+    }
+}
+
 struct Ctx<'m> {
     m: &'m Model,
     opts: Options,
     vertices: Vec<Vertex>,
-    vnames: FxHashSet<String>,
-    fnames: FxHashSet<String>,
+    vnames: Names,
+    fnames: Names,
     div: Divisions,
     /// Joins asked for by [`jog_points`]: (from, to), vertices of `m`.
     stuck: Vec<(VertexId, VertexId)>,
@@ -542,7 +657,7 @@ impl Ctx<'_> {
             name = format!("{base}.{k}");
             k += 1;
         }
-        self.vnames.insert(name.clone());
+        self.vnames.insert(&name);
         let id = VertexId(self.vertices.len() as u32);
         self.vertices.push(Vertex {
             name,
@@ -749,7 +864,7 @@ fn cut_rounds(m: &Model, opts: Options, replay: bool) -> Result<(Model, Stats), 
         if joins.is_empty() || round == 3 {
             return Ok((out, done));
         }
-        let joined = prepare_joining(&model, opts.eps, &mut stats, &joins);
+        let joined = prepare_joining(&model, opts.eps, &mut stats, &joins, replay);
         memo = Some(next);
         before = Some(std::mem::replace(&mut model, joined));
     }
@@ -1153,12 +1268,12 @@ fn mesh_all(
         m,
         opts,
         vertices: m.vertices.clone(),
-        vnames: m.vertices.iter().map(|v| v.name.clone()).collect(),
+        vnames: m.vertices.iter().map(|v| v.name.as_str()).collect(),
         fnames: m
             .faces
             .iter()
-            .filter_map(|f| f.name.clone())
-            .chain(m.wires.iter().filter_map(|w| w.name.clone()))
+            .filter_map(|f| f.name.as_deref())
+            .chain(m.wires.iter().filter_map(|w| w.name.as_deref()))
             .collect(),
         div: {
             let (feet, thin) = feet_and_thin(m, opts.eps);
@@ -1313,7 +1428,7 @@ fn mesh_all(
                         loop {
                             k += 1;
                             let cand = format!("{n}.{k}");
-                            if cx.fnames.insert(cand.clone()) {
+                            if cx.fnames.insert(&cand) {
                                 break cand;
                             }
                         }

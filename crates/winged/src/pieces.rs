@@ -29,6 +29,11 @@ pub struct Snapper {
 impl Snapper {
     /// Every live vertex of the mesh.
     pub fn new(mesh: &Mesh, eps: f64) -> Snapper {
+        Snapper::new_in(mesh, eps, None)
+    }
+
+    /// Every live vertex of `region` (all with `None`).
+    pub fn new_in(mesh: &Mesh, eps: f64, region: Option<&crate::weld::Region>) -> Snapper {
         let mut s = Snapper {
             eps,
             cell: (2.0 * eps).max(f64::MIN_POSITIVE),
@@ -36,7 +41,9 @@ impl Snapper {
             created: 0,
         };
         for v in mesh.vertices() {
-            s.insert(v, mesh.pos(v));
+            if region.is_none_or(|r| r.has_vertex(v)) {
+                s.insert(v, mesh.pos(v));
+            }
         }
         s
     }
@@ -549,8 +556,24 @@ pub fn repair_all(
     skip_repair: &dyn Fn(FaceId) -> bool,
     st: &mut Settled,
 ) {
-    let mut snap = Snapper::new(mesh, eps);
-    let mut dirty: Vec<FaceId> = mesh.faces().collect();
+    repair_all_in(mesh, eps, frame, skip_repair, st, None)
+}
+
+/// [`repair_all`] on the faces of `region`, snapping to its vertices (see
+/// [`crate::weld::Region`]).
+pub fn repair_all_in(
+    mesh: &mut Mesh,
+    eps: f64,
+    frame: &dyn Fn(&[Vec<DVec3>]) -> Option<Frame>,
+    skip_repair: &dyn Fn(FaceId) -> bool,
+    st: &mut Settled,
+    region: Option<&crate::weld::Region>,
+) {
+    let mut snap = Snapper::new_in(mesh, eps, region);
+    let mut dirty: Vec<FaceId> = mesh
+        .faces()
+        .filter(|&f| region.is_none_or(|r| r.has_face(f)))
+        .collect();
     for _ in 0..4 {
         let created = snap.created;
         for &f in &dirty {
@@ -593,7 +616,7 @@ pub fn repair_all(
             .faces()
             .map(|f| (f, mesh.face(f).contours.iter().map(Vec::len).sum()))
             .collect();
-        st.tvertices += crate::weld::split_edges(mesh, eps).inserted;
+        st.tvertices += crate::weld::split_edges_in(mesh, eps, region).inserted;
         dirty = mesh
             .faces()
             .filter(|f| {

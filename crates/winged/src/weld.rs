@@ -20,6 +20,43 @@ use rustc_hash::{FxHashMap, FxHashSet};
 
 use crate::{EdgeId, FaceId, Mesh, VertexId};
 
+/// The part of a mesh an operation is limited to (the `_in` versions of
+/// [`merge_vertices`], [`split_edges`], [`collapse_tents`],
+/// [`join_vertices`] and `pieces::repair_all`): its faces and vertices by
+/// id; faces and vertices made after it was (ids past its ends) are in it.
+/// On a mesh that the operation leaves unchanged outside the region (one
+/// already welded, split and repaired, changed only inside the region
+/// since), the limited operation does what the whole one does, at the
+/// region's cost. Faces outside it that share a vertex or edge it changes
+/// are still rewritten.
+pub struct Region {
+    faces: Vec<bool>,
+    verts: Vec<bool>,
+}
+
+impl Region {
+    /// Faces and vertices by id (true: in the region).
+    pub fn new(faces: Vec<bool>, verts: Vec<bool>) -> Region {
+        Region { faces, verts }
+    }
+
+    pub fn has_face(&self, f: FaceId) -> bool {
+        self.faces.get(f.idx()).copied().unwrap_or(true)
+    }
+
+    pub fn has_vertex(&self, v: VertexId) -> bool {
+        self.verts.get(v.idx()).copied().unwrap_or(true)
+    }
+}
+
+fn face_in(region: Option<&Region>, f: FaceId) -> bool {
+    region.is_none_or(|r| r.has_face(f))
+}
+
+fn vertex_in(region: Option<&Region>, v: VertexId) -> bool {
+    region.is_none_or(|r| r.has_vertex(v))
+}
+
 /// Edge splitting repeats on the edges it created until nothing changes, at most this often.
 const MAX_SPLIT_PASSES: usize = 16;
 
@@ -138,7 +175,16 @@ impl Points {
 /// area. Returns the number of vertices merged and the dropped faces with
 /// the reason, in statement order.
 pub fn merge_vertices(mesh: &mut Mesh, eps: f64) -> (usize, Vec<(FaceId, String)>) {
-    let order: Vec<VertexId> = mesh.vertices().collect();
+    merge_vertices_in(mesh, eps, None)
+}
+
+/// [`merge_vertices`] among the vertices of `region` (see [`Region`]).
+pub fn merge_vertices_in(
+    mesh: &mut Mesh,
+    eps: f64,
+    region: Option<&Region>,
+) -> (usize, Vec<(FaceId, String)>) {
+    let order: Vec<VertexId> = mesh.vertices().filter(|&v| vertex_in(region, v)).collect();
     let nv = mesh.model().vertices.len();
     let mut rank = vec![u32::MAX; nv];
     for (k, &v) in order.iter().enumerate() {
@@ -190,22 +236,39 @@ pub fn merge_vertices(mesh: &mut Mesh, eps: f64) -> (usize, Vec<(FaceId, String)
         }
     }
 
-    let dropped = apply_merges(mesh, &order, &rep, merged > 0, eps);
+    let dropped = apply_merges(mesh, &order, &rep, merged > 0, eps, region);
     (merged, dropped)
 }
 
 /// Replaces every vertex `v` by `rep[v]` in faces and wires and removes
 /// the replaced vertices (when `any`), then drops the faces left without
-/// area (checked on every face: see below). Returns the dropped faces with
-/// the reason, in statement order.
+/// area (checked on every face, or every face of `region` and every face
+/// at a replaced vertex: see below). Returns the dropped faces with the
+/// reason, in statement order.
 fn apply_merges(
     mesh: &mut Mesh,
     order: &[VertexId],
     rep: &[VertexId],
     any: bool,
     eps: f64,
+    region: Option<&Region>,
 ) -> Vec<(FaceId, String)> {
-    let faces: Vec<FaceId> = mesh.faces().collect();
+    let faces: Vec<FaceId> = match region {
+        None => mesh.faces().collect(),
+        Some(r) => {
+            let mut at: FxHashSet<FaceId> = FxHashSet::default();
+            for &v in order {
+                if rep.get(v.idx()).is_some_and(|&r| r != v) {
+                    for &e in mesh.vertex_edges(v) {
+                        at.extend(mesh.edge(e).faces());
+                    }
+                }
+            }
+            mesh.faces()
+                .filter(|f| r.has_face(*f) || at.contains(f))
+                .collect()
+        }
+    };
     let mut dropped = Vec::new();
     let mut touched = vec![false; mesh.model().faces.len()];
     if any {
@@ -310,6 +373,15 @@ pub fn is_tent(u: DVec3, v: DVec3, w: DVec3, eps: f64) -> bool {
 /// are found, at most a few times. Returns the number of vertices replaced
 /// and the faces dropped as in [`merge_vertices`].
 pub fn collapse_tents(mesh: &mut Mesh, eps: f64) -> (usize, Vec<(FaceId, String)>) {
+    collapse_tents_in(mesh, eps, None)
+}
+
+/// [`collapse_tents`] on the faces of `region` (see [`Region`]).
+pub fn collapse_tents_in(
+    mesh: &mut Mesh,
+    eps: f64,
+    region: Option<&Region>,
+) -> (usize, Vec<(FaceId, String)>) {
     let mut replaced = 0;
     let mut dropped = Vec::new();
     if eps.is_nan() || eps <= 0.0 {
@@ -324,7 +396,7 @@ pub fn collapse_tents(mesh: &mut Mesh, eps: f64) -> (usize, Vec<(FaceId, String)
         }
         let mut joins: Vec<(VertexId, VertexId)> = Vec::new();
         let mut touched = vec![false; nv];
-        let faces: Vec<FaceId> = mesh.faces().collect();
+        let faces: Vec<FaceId> = mesh.faces().filter(|&f| face_in(region, f)).collect();
         for f in faces {
             for c in &mesh.face(f).contours {
                 let n = c.len();
@@ -360,7 +432,7 @@ pub fn collapse_tents(mesh: &mut Mesh, eps: f64) -> (usize, Vec<(FaceId, String)
             break;
         }
         // Tents touch none of each other's vertices: every join is made.
-        let (joined, d) = join_vertices(mesh, &joins, eps);
+        let (joined, d) = join_vertices_in(mesh, &joins, eps, region);
         replaced += joined;
         dropped.extend(d);
     }
@@ -377,6 +449,17 @@ pub fn join_vertices(
     mesh: &mut Mesh,
     joins: &[(VertexId, VertexId)],
     eps: f64,
+) -> (usize, Vec<(FaceId, String)>) {
+    join_vertices_in(mesh, joins, eps, None)
+}
+
+/// [`join_vertices`], checking for faces left without area only in
+/// `region` and at the joined vertices (see [`Region`]).
+pub fn join_vertices_in(
+    mesh: &mut Mesh,
+    joins: &[(VertexId, VertexId)],
+    eps: f64,
+    region: Option<&Region>,
 ) -> (usize, Vec<(FaceId, String)>) {
     let order: Vec<VertexId> = mesh.vertices().collect();
     let nv = mesh.model().vertices.len();
@@ -398,7 +481,7 @@ pub fn join_vertices(
     if joined == 0 {
         return (0, Vec::new());
     }
-    let dropped = apply_merges(mesh, &order, &rep, true, eps);
+    let dropped = apply_merges(mesh, &order, &rep, true, eps, region);
     (joined, dropped)
 }
 
@@ -452,7 +535,13 @@ fn vertices_on_edge(mesh: &Mesh, index: &Points, e: EdgeId, eps: f64) -> Vec<Ver
 /// the previous one created (a vertex inserted slightly off the line can
 /// bring another within reach), until nothing changes.
 pub fn split_edges(mesh: &mut Mesh, eps: f64) -> Split {
-    let faces: Vec<FaceId> = mesh.faces().collect();
+    split_edges_in(mesh, eps, None)
+}
+
+/// [`split_edges`] for the vertices and edges of the faces of `region`
+/// (see [`Region`]).
+pub fn split_edges_in(mesh: &mut Mesh, eps: f64, region: Option<&Region>) -> Split {
+    let faces: Vec<FaceId> = mesh.faces().filter(|&f| face_in(region, f)).collect();
     let mut sound = vec![false; mesh.model().faces.len()];
     for &f in &faces {
         sound[f.idx()] = degeneracy_within(mesh, f, eps, NoArea::Narrow).is_none();
