@@ -1354,13 +1354,15 @@ fn mesh_all(
                         p
                     }
                     None => {
-                        let (p, rec) = match reuse.and_then(|r| r.replay(&mut cx, *f, &mut stats)) {
-                            Some((p, rec)) => {
+                        let replayed =
+                            reuse.and_then(|r| r.replay(&mut cx, *f, &mut stats, &mut memo));
+                        let p = match replayed {
+                            Some((p, plain)) => {
                                 stats.replayed += 1;
-                                if rec.plain() {
+                                if plain {
                                     stats.plain.push(label.clone());
                                 }
-                                (p, rec)
+                                p
                             }
                             None => {
                                 if reuse.is_some() {
@@ -1382,19 +1384,19 @@ fn mesh_all(
                                         }
                                     },
                                 };
-                                let trace = cx.trace.take().unwrap_or_default();
-                                let rec = reuse::Record::new(
-                                    trace,
+                                let mut trace = cx.trace.take().unwrap_or_default();
+                                trace.grid_cells = stats.grid_cells - cells;
+                                trace.plain = plain;
+                                trace.stuck = cx.stuck.len() > stuck;
+                                memo.record(
+                                    *f,
+                                    &trace,
                                     &p,
-                                    stats.grid_cells - cells,
-                                    plain,
-                                    cx.resting.get(f).cloned().unwrap_or_default(),
-                                    cx.stuck.len() > stuck,
+                                    cx.resting.get(f).map_or(&[], Vec::as_slice),
                                 );
-                                (p, rec)
+                                p
                             }
                         };
-                        memo.add(*f, rec);
                         twins.entry(key).or_insert((normal, p.clone()));
                         p
                     }
@@ -1448,7 +1450,10 @@ fn mesh_all(
     flush_vertices(&cx, &mut out, &mut emitted);
     memo.finish(
         std::mem::take(&mut cx.div.map),
-        cx.vertices.iter().map(|v| v.pos).collect(),
+        cx.vertices[m.vertices.len()..]
+            .iter()
+            .map(|v| v.pos)
+            .collect(),
         m.vertices.len(),
     );
     out.vertices = cx.vertices;

@@ -43,83 +43,42 @@ use ug::{FaceId, MaterialId, Model, VertexId};
 /// edges (`Ctx::divided`, which divides an edge on first use; meshing a
 /// face divides all its contour edges, in order, before anything else):
 /// the vertices of its own it made, in order, (k, id) for the vertex
-/// named `FACE.vk`.
+/// named `FACE.vk`; and how it was meshed.
 #[derive(Default)]
 pub(super) struct Trace {
     pub(super) vertices: Vec<(u32, VertexId)>,
+    /// Grid cells it added to [`Stats::grid_cells`].
+    pub(super) grid_cells: usize,
+    /// Meshed by the plain triangulation (listed in [`Stats::plain`]).
+    pub(super) plain: bool,
+    /// It asked for joins.
+    pub(super) stuck: bool,
 }
 
-/// What meshing one face did and gave.
-pub(super) struct Record {
-    trace: Trace,
-    /// The patches' vertices, one contour after the other.
-    ids: Vec<VertexId>,
-    /// Per patch its number of contours, then each contour's length.
-    shape: Vec<u32>,
+/// What meshing one face did and gave, as ranges of [`Memo`]'s arenas
+/// (start, length).
+#[derive(Clone, Copy)]
+struct Record {
+    /// Its own vertices, in `Memo::inner`.
+    inner: (u32, u32),
+    /// The patches' vertices, one contour after the other, in `Memo::ids`.
+    ids: (u32, u32),
+    /// Per patch its number of contours, then each contour's length, in
+    /// `Memo::shape`.
+    shape: (u32, u32),
+    /// The vertices resting inside it (see `resting_points`), in
+    /// `Memo::ids`.
+    resting: (u32, u32),
     /// Grid cells it added to [`Stats::grid_cells`].
-    grid_cells: usize,
+    grid_cells: u32,
     /// Meshed by the plain triangulation (listed in [`Stats::plain`]).
     plain: bool,
-    /// The vertices resting inside it (see `resting_points`).
-    resting: Vec<VertexId>,
     /// It asked for joins.
     stuck: bool,
 }
 
-impl Record {
-    pub(super) fn new(
-        trace: Trace,
-        patches: &Patches,
-        grid_cells: usize,
-        plain: bool,
-        resting: Vec<VertexId>,
-        stuck: bool,
-    ) -> Record {
-        let mut ids = Vec::new();
-        let mut shape = Vec::new();
-        for p in patches {
-            shape.push(p.len() as u32);
-            for c in p {
-                shape.push(c.len() as u32);
-                ids.extend_from_slice(c);
-            }
-        }
-        ids.shrink_to_fit();
-        shape.shrink_to_fit();
-        Record {
-            trace,
-            ids,
-            shape,
-            grid_cells,
-            plain,
-            resting,
-            stuck,
-        }
-    }
-
-    /// The patches, each vertex through `tr`.
-    fn patches(&self, tr: impl Fn(VertexId) -> VertexId) -> Patches {
-        let mut out = Vec::new();
-        let (mut i, mut k) = (0, 0);
-        while i < self.shape.len() {
-            let n = self.shape[i] as usize;
-            i += 1;
-            let mut p = Vec::with_capacity(n);
-            for _ in 0..n {
-                let l = self.shape[i] as usize;
-                i += 1;
-                p.push(self.ids[k..k + l].iter().map(|&v| tr(v)).collect());
-                k += l;
-            }
-            out.push(p);
-        }
-        out
-    }
-
-    /// Whether the face was meshed by the plain triangulation.
-    pub(super) fn plain(&self) -> bool {
-        self.plain
-    }
+fn range<T>(v: &[T], r: (u32, u32)) -> &[T] {
+    &v[r.0 as usize..(r.0 + r.1) as usize]
 }
 
 /// A round's records, for the next round.
@@ -128,24 +87,83 @@ pub(super) struct Memo {
     /// Per face of the round's model, what meshing it did (none for a
     /// twin, which copied an earlier face's patches).
     records: Vec<Option<Record>>,
+    /// The records' arenas.
+    inner: Vec<(u32, VertexId)>,
+    ids: Vec<VertexId>,
+    shape: Vec<u32>,
     /// The edges' divisions (lower vertex id first).
     div: FxHashMap<(VertexId, VertexId), Vec<VertexId>>,
-    /// Every vertex's position, the model's and the new.
+    /// The positions of the vertices the round made (ids from `n_model`).
     pos: Vec<DVec3>,
-    /// How many of them are the model's.
+    /// How many vertices are the model's.
     n_model: usize,
 }
 
 impl Memo {
-    /// Keeps `rec` for face `f` of the round's model.
-    pub(super) fn add(&mut self, f: FaceId, rec: Record) {
+    /// Keeps what meshing face `f` of the round's model did and gave (the
+    /// first record for a face; later ones are ignored).
+    pub(super) fn record(
+        &mut self,
+        f: FaceId,
+        trace: &Trace,
+        patches: &Patches,
+        resting: &[VertexId],
+    ) {
         if self.records.len() <= f.idx() {
             self.records.resize_with(f.idx() + 1, || None);
         }
-        self.records[f.idx()].get_or_insert(rec);
+        if self.records[f.idx()].is_some() {
+            return;
+        }
+        let at = |n: usize, len: usize| (n as u32, (len - n) as u32);
+        let (i0, s0, n0) = (self.ids.len(), self.shape.len(), self.inner.len());
+        for p in patches {
+            self.shape.push(p.len() as u32);
+            for c in p {
+                self.shape.push(c.len() as u32);
+                self.ids.extend_from_slice(c);
+            }
+        }
+        let ids = at(i0, self.ids.len());
+        let shape = at(s0, self.shape.len());
+        self.inner.extend_from_slice(&trace.vertices);
+        let inner = at(n0, self.inner.len());
+        let r0 = self.ids.len();
+        self.ids.extend_from_slice(resting);
+        let resting = at(r0, self.ids.len());
+        self.records[f.idx()] = Some(Record {
+            inner,
+            ids,
+            shape,
+            resting,
+            grid_cells: trace.grid_cells as u32,
+            plain: trace.plain,
+            stuck: trace.stuck,
+        });
     }
 
-    /// The round's shared state at its end.
+    /// The patches of `rec`, each vertex through `tr`.
+    fn patches(&self, rec: &Record, tr: impl Fn(VertexId) -> VertexId) -> Patches {
+        let (shape, ids) = (range(&self.shape, rec.shape), range(&self.ids, rec.ids));
+        let mut out = Vec::new();
+        let (mut i, mut k) = (0, 0);
+        while i < shape.len() {
+            let n = shape[i] as usize;
+            i += 1;
+            let mut p = Vec::with_capacity(n);
+            for _ in 0..n {
+                let l = shape[i] as usize;
+                i += 1;
+                p.push(ids[k..k + l].iter().map(|&v| tr(v)).collect());
+                k += l;
+            }
+            out.push(p);
+        }
+        out
+    }
+
+    /// The round's shared state at its end: the divisions, the positions
+    /// of all vertices, how many are the model's.
     pub(super) fn finish(
         &mut self,
         div: FxHashMap<(VertexId, VertexId), Vec<VertexId>>,
@@ -155,6 +173,14 @@ impl Memo {
         self.div = div;
         self.pos = pos;
         self.n_model = n_model;
+    }
+
+    /// The position of vertex `v` made by the round.
+    fn made_pos(&self, v: VertexId) -> Option<DVec3> {
+        v.idx()
+            .checked_sub(self.n_model)
+            .and_then(|i| self.pos.get(i))
+            .copied()
     }
 }
 
@@ -307,31 +333,35 @@ impl<'a> Reuse<'a> {
         })
     }
 
-    /// Replays last round's meshing of face `f` into `cx` and `stats`:
-    /// its patches and its record for the next round, or `None` (and
-    /// nothing changed but edges divided as meshing it would divide them
-    /// first) where it must be meshed again.
+    /// Replays last round's meshing of face `f` into `cx` and `stats`
+    /// and records it in `next` for the next round: its patches, or `None`
+    /// (and nothing changed but edges divided as meshing it would divide
+    /// them first) where it must be meshed again. The second value: it
+    /// was meshed by the plain triangulation.
     pub(super) fn replay(
         &self,
         cx: &mut Ctx<'_>,
         f: FaceId,
         stats: &mut Stats,
-    ) -> Option<(Patches, Record)> {
+        next: &mut Memo,
+    ) -> Option<(Patches, bool)> {
+        let memo = self.memo;
         let g = self.from.get(f.idx()).copied().flatten()?;
-        let rec = self.memo.records.get(g.idx())?.as_ref()?;
+        let rec = *memo.records.get(g.idx())?.as_ref()?;
         if rec.stuck {
             return None;
         }
         let now: Vec<VertexId> = cx.resting.get(&f).cloned().unwrap_or_default();
-        if now.len() != rec.resting.len()
+        let was = range(&memo.ids, rec.resting);
+        if now.len() != was.len()
             || now
                 .iter()
-                .zip(&rec.resting)
+                .zip(was)
                 .any(|(&a, &b)| self.back[a.idx()] != Some(b))
         {
             return None;
         }
-        let n1 = self.memo.n_model;
+        let n1 = memo.n_model;
         // The face's contour edges, last round's ids and this round's.
         let face = &cx.m.faces[f.idx()];
         let edges: Vec<((VertexId, VertexId), (VertexId, VertexId))> = face
@@ -341,48 +371,51 @@ impl<'a> Reuse<'a> {
             .map(|(a, b)| Some(((self.back[a.idx()]?, self.back[b.idx()]?), (a, b))))
             .collect::<Option<_>>()?;
         // Every vertex of the patches is the model's or made by the face.
+        let inner = range(&memo.inner, rec.inner);
         let mut made: FxHashSet<VertexId> = FxHashSet::default();
         for &((a, b), _) in &edges {
-            made.extend(self.memo.div.get(&key(a, b))?.iter().copied());
+            made.extend(memo.div.get(&key(a, b))?.iter().copied());
         }
-        made.extend(rec.trace.vertices.iter().map(|x| x.1));
+        made.extend(inner.iter().map(|x| x.1));
         let known = |v: VertexId| {
             if v.idx() < n1 {
                 self.fwd[v.idx()].is_some()
             } else {
-                made.contains(&v)
+                made.contains(&v) && memo.made_pos(v).is_some()
             }
         };
-        if !rec.ids.iter().all(|&v| known(v)) {
+        if !range(&memo.ids, rec.ids).iter().all(|&v| known(v))
+            || !made.iter().all(|&v| memo.made_pos(v).is_some())
+        {
             return None;
         }
         // The divisions, as meshing the face would make them first; each
         // must come out as last round's.
         let mut map: FxHashMap<VertexId, VertexId> = FxHashMap::default();
-        let mut trace = Trace {
-            vertices: Vec::with_capacity(rec.trace.vertices.len()),
-        };
         for &((a, b), (a2, b2)) in &edges {
             cx.divided(a2, b2);
-            let (l1, l2) = (
-                self.memo.div.get(&key(a, b))?,
-                cx.div.map.get(&key(a2, b2))?,
-            );
+            let (l1, l2) = (memo.div.get(&key(a, b))?, cx.div.map.get(&key(a2, b2))?);
             if l1.len() != l2.len()
                 || l1
                     .iter()
                     .zip(l2)
-                    .any(|(&x, &y)| self.memo.pos[x.idx()] != cx.pos(y))
+                    .any(|(&x, &y)| memo.made_pos(x) != Some(cx.pos(y)))
             {
                 return None;
             }
             map.extend(l1.iter().copied().zip(l2.iter().copied()));
         }
         // Its own vertices, in order, named as meshing it names them.
-        let face = &cx.m.faces[f.idx()];
         let fname = face.name.clone().unwrap_or_else(|| format!("f{}", f.0 + 1));
-        for &(k, v) in &rec.trace.vertices {
-            let w = cx.new_vertex(format!("{fname}.v{k}"), self.memo.pos[v.idx()]);
+        let mut trace = Trace {
+            vertices: Vec::with_capacity(inner.len()),
+            grid_cells: rec.grid_cells as usize,
+            plain: rec.plain,
+            stuck: false,
+        };
+        for &(k, v) in inner {
+            let p = memo.made_pos(v).expect("checked above");
+            let w = cx.new_vertex(format!("{fname}.v{k}"), p);
             map.insert(v, w);
             trace.vertices.push((k, w));
         }
@@ -393,9 +426,9 @@ impl<'a> Reuse<'a> {
                 map[&v]
             }
         };
-        let patches = rec.patches(tr);
-        stats.grid_cells += rec.grid_cells;
-        let next = Record::new(trace, &patches, rec.grid_cells, rec.plain, now, false);
-        Some((patches, next))
+        let patches = memo.patches(&rec, tr);
+        stats.grid_cells += rec.grid_cells as usize;
+        next.record(f, &trace, &patches, &now);
+        Some((patches, rec.plain))
     }
 }
