@@ -712,6 +712,25 @@ fn no_foot_is_placed_across_a_corner_from_its_short_edge() {
     );
 }
 
+/// A globe's facet hanging from the ceiling at 24°, its cut line meeting
+/// a light panel's edge in the ceiling at 67°
+/// (fixtures/cut/globe-facet-at-a-panel-corner.ug, property seed 42050):
+/// the foot of the line's next vertex on the panel's edge, 4.6 epsilon
+/// from the corner, made the corner's triangle, which lay within 2
+/// epsilon of the facet's plane and overlapped its patch (one pair at
+/// every length). No foot is placed across a corner from an edge that a
+/// face is folded back onto at a small angle, nearer than 3 epsilon /
+/// sin of that angle.
+#[test]
+fn no_foot_is_placed_across_a_corner_from_a_folded_edge() {
+    cuts_cleanly(
+        "cut/globe-facet-at-a-panel-corner.ug",
+        "8.338334276618911e-6",
+        &["0.7", "0.3", "1", "2"],
+        1e-9,
+    );
+}
+
 /// After a join the model is meshed again, but the faces the join changed
 /// nothing for are replayed from the first round (libmesh::patch's
 /// `reuse`): the output is the same, byte for byte, as meshing every face

@@ -472,7 +472,17 @@ type Thin = FxHashMap<(VertexId, VertexId), Vec<(VertexId, VertexId)>>;
 /// other: a needle (property seed 13621, a wall's end 1.7 to 2.6 epsilon
 /// wide and 2.8 m tall whose one side was divided and the other, along a
 /// neighbour's edge, was not).
-fn feet_and_thin(m: &Model, eps: f64) -> (Feet, Thin) {
+///
+/// Nor across a corner from the vertex's own edge to that corner where
+/// another face is folded back onto this one along that edge by under
+/// 30° (sine s) and the foot lies within 3 epsilon / s of the edge: the
+/// corner's triangle would lie within 2 epsilon of that face's plane, on
+/// its patches (property seed 42050 with curved things: a globe's facet
+/// hanging from the ceiling at 24°, its cut line meeting a light panel's
+/// edge in the ceiling at 67°; the foot of the line's next vertex on the
+/// panel's edge, 4.6 epsilon from the corner, made a triangle there that
+/// overlapped the globe's).
+fn feet_and_thin(m: &Model, eps: f64, planes: &FacePlanes) -> (Feet, Thin) {
     let (mut out, mut thin) = (Feet::default(), Thin::default());
     if eps.is_nan() || eps <= 0.0 {
         return (out, thin);
@@ -530,10 +540,25 @@ fn feet_and_thin(m: &Model, eps: f64) -> (Feet, Thin) {
                 // the triangle lay on the globe's patch, folded at 25°,
                 // property seed 13674). The corner's triangle reaches along
                 // the side instead (or gets a point across its jog).
-                let corner = mine.clone().any(|e| {
-                    (e.0 == g.0 || e.0 == g.1 || e.1 == g.0 || e.1 == g.1)
-                        && m.pos(e.0).distance(m.pos(e.1)) < JOG * eps
-                });
+                let at_corner =
+                    |e: &(VertexId, VertexId)| e.0 == g.0 || e.0 == g.1 || e.1 == g.0 || e.1 == g.1;
+                let corner = mine
+                    .clone()
+                    .any(|e| at_corner(&e) && m.pos(e.0).distance(m.pos(e.1)) < JOG * eps)
+                    || (d > eps
+                        && mine.clone().any(|e| {
+                            at_corner(&e) && {
+                                let foot = p + (q - p) * t;
+                                let (a, b) = (m.pos(e.0), m.pos(e.1));
+                                let dir = (b - a).normalize_or_zero();
+                                let w = foot - a;
+                                let across = w - dir * w.dot(dir);
+                                let h = across.length();
+                                h > 0.0
+                                    && fold_sin(m, planes, &|g| fold_normal(m, g), f, e, across / h)
+                                        .is_some_and(|s| h * s < 3.0 * eps)
+                            }
+                        }));
                 if d > eps && !corner {
                     out.entry(g).or_default().push(t);
                 }
@@ -1276,7 +1301,7 @@ fn mesh_all(
             .chain(m.wires.iter().filter_map(|w| w.name.as_deref()))
             .collect(),
         div: {
-            let (feet, thin) = feet_and_thin(m, opts.eps);
+            let (feet, thin) = feet_and_thin(m, opts.eps, &planes);
             Divisions {
                 map: FxHashMap::default(),
                 feet,
@@ -2257,6 +2282,98 @@ fn jog_points(
     (out, stuck)
 }
 
+/// A face's unit normal and its contours' signed areas about it (see
+/// [`fold_sin`]).
+fn fold_normal(m: &Model, g: FaceId) -> Option<FoldNormal> {
+    let pts = face_points(m, &m.faces[g.idx()]);
+    let gn = geom::face_normal(&pts)?.normalize();
+    let gframe = Frame::new(DVec3::ZERO, gn);
+    let areas = pts
+        .iter()
+        .map(|c| {
+            let c2: Vec<DVec2> = c.iter().map(|&q| gframe.to_2d(q)).collect();
+            geom::signed_area_2d(&c2)
+        })
+        .collect::<Vec<f64>>();
+    Some((gn, areas))
+}
+
+/// The smallest sine of the angle at which a face across contour edge
+/// `(oa, ob)` (`oa < ob`) of face `f` is folded back onto `f`, by
+/// [`FOLD_MIN_DEG`] to 30°: its inside on the side of `inward`, `f`'s
+/// inward direction at the edge (a unit vector in `f`'s plane). Faces on
+/// the same vertices as `f` (twins, which get the same patches) do not
+/// count. `normal` gives a face's [`fold_normal`].
+fn fold_sin(
+    m: &Model,
+    planes: &FacePlanes,
+    normal: &dyn Fn(FaceId) -> Option<FoldNormal>,
+    f: FaceId,
+    (oa, ob): (VertexId, VertexId),
+    inward: DVec3,
+) -> Option<f64> {
+    let min_sin = FOLD_MIN_DEG.to_radians().sin();
+    let dir = (m.pos(ob) - m.pos(oa)).normalize_or_zero();
+    let mut own: Option<Vec<VertexId>> = None;
+    let mut sin_fold: Option<f64> = None;
+    for (g, ci, forward) in edge_uses(m, planes, oa, ob) {
+        if g == f {
+            continue;
+        }
+        let gface = &m.faces[g.idx()];
+        // Its normal and its contours' signed areas about it.
+        let Some((gn, area)) = normal(g).map(|(n, areas)| (n, areas[ci as usize])) else {
+            continue;
+        };
+        // Where g walks the edge (`forward`: from the lower vertex),
+        // and on which side its inside is: left of the walk for an
+        // outer contour walked counter-clockwise about its normal
+        // or a hole walked clockwise.
+        if area == 0.0 {
+            continue;
+        }
+        let walk = if forward { dir } else { -dir };
+        let mut gin = gn.cross(walk);
+        if (ci == 0) != (area > 0.0) {
+            gin = -gin;
+        }
+        // Folded back by under 30° (the overlap test takes faces
+        // within about 26° of parallel as coplanar).
+        if gin.dot(inward) <= 0.0 {
+            continue;
+        }
+        // Under 1° the faces lie on each other (coincident faces
+        // sharing an edge): no point across mends that, and such
+        // overlaps are ugcopl's and ugclean's.
+        let s = gin.cross(inward).length();
+        if !(min_sin..0.5).contains(&s) {
+            continue;
+        }
+        if sin_fold.is_some_and(|x| x <= s) {
+            continue;
+        }
+        let own = own.get_or_insert_with(|| {
+            let mut k: Vec<VertexId> = m.faces[f.idx()]
+                .contours
+                .iter()
+                .flatten()
+                .copied()
+                .collect();
+            k.sort_unstable();
+            k.dedup();
+            k
+        });
+        let mut gk: Vec<VertexId> = gface.contours.iter().flatten().copied().collect();
+        gk.sort_unstable();
+        gk.dedup();
+        if gk == *own {
+            continue;
+        }
+        sin_fold = Some(s);
+    }
+    sin_fold
+}
+
 /// Below this angle two faces folded onto each other along an edge lie on
 /// each other (coincident faces sharing it): [`fold_points`] leaves them
 /// to ugcopl and ugclean. It also sets how near an apex is looked at.
@@ -2304,7 +2421,6 @@ fn fold_points(
     };
     let min_sin = FOLD_MIN_DEG.to_radians().sin();
     let reach = 3.0 * eps / min_sin;
-    let mut key: Option<Vec<VertexId>> = None;
     let to3 = |w: DVec2| frame.u * w.x + frame.v * w.y;
     // The triangles' edges with an apex that near (most faces have none;
     // only then are the boundary segments looked up).
@@ -2343,85 +2459,14 @@ fn fold_points(
             n = -n;
         }
         let inward = to3(n).normalize_or_zero();
-        let dir = (m.pos(ob) - m.pos(oa)).normalize_or_zero();
-        let mut sin_fold: Option<f64> = None;
-        for (g, ci, forward) in edge_uses(m, &cx.planes, oa, ob) {
-            if g == f {
-                continue;
-            }
-            let gface = &m.faces[g.idx()];
-            // Its normal and its contours' signed areas about it.
-            let Some((gn, area)) = cx
-                .fold_normals
+        let normal = |g: FaceId| {
+            cx.fold_normals
                 .borrow_mut()
                 .entry(g)
-                .or_insert_with(|| {
-                    let pts = face_points(m, gface);
-                    let gn = geom::face_normal(&pts)?.normalize();
-                    let gframe = Frame::new(DVec3::ZERO, gn);
-                    let areas = pts
-                        .iter()
-                        .map(|c| {
-                            let c2: Vec<DVec2> = c.iter().map(|&q| gframe.to_2d(q)).collect();
-                            geom::signed_area_2d(&c2)
-                        })
-                        .collect::<Vec<f64>>();
-                    Some((gn, areas))
-                })
-                .as_ref()
-                .map(|(n, areas)| (*n, areas[ci as usize]))
-            else {
-                continue;
-            };
-            // Where g walks the edge (`forward`: from the lower vertex),
-            // and on which side its inside is: left of the walk for an
-            // outer contour walked counter-clockwise about its normal
-            // or a hole walked clockwise.
-            if area == 0.0 {
-                continue;
-            }
-            let walk = if forward { dir } else { -dir };
-            let mut gin = gn.cross(walk);
-            if (ci == 0) != (area > 0.0) {
-                gin = -gin;
-            }
-            // Folded back by under 30° (the overlap test takes faces
-            // within about 26° of parallel as coplanar).
-            if gin.dot(inward) <= 0.0 {
-                continue;
-            }
-            // Under 1° the faces lie on each other (coincident faces
-            // sharing an edge): no point across mends that, and such
-            // overlaps are ugcopl's and ugclean's.
-            let s = gin.cross(inward).length();
-            if s < min_sin {
-                continue;
-            }
-            if s >= 0.5 {
-                continue;
-            }
-            if h * s >= 3.0 * eps {
-                continue;
-            }
-            let own = key.get_or_insert_with(|| {
-                let mut k: Vec<VertexId> = m.faces[f.idx()]
-                    .contours
-                    .iter()
-                    .flatten()
-                    .copied()
-                    .collect();
-                k.sort_unstable();
-                k.dedup();
-                k
-            });
-            let mut gk: Vec<VertexId> = gface.contours.iter().flatten().copied().collect();
-            gk.sort_unstable();
-            gk.dedup();
-            if gk == *own {
-                continue;
-            }
-            sin_fold = Some(sin_fold.map_or(s, |x: f64| x.min(s)));
-        }
+                .or_insert_with(|| fold_normal(m, g))
+                .clone()
+        };
+        let sin_fold = fold_sin(m, &cx.planes, &normal, f, (oa, ob), inward);
         let Some(s) = sin_fold else {
             continue;
         };
