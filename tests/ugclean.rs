@@ -560,6 +560,38 @@ fn coincident_step_checked(path: &str, eps: &str) -> (String, serde_json::Value)
     (out, r)
 }
 
+/// A kept face on records of its own 1.6 epsilon from its removed twin's,
+/// which a neighbour of the twin shares (fixtures/clean/wall-face-in-front-of-a-removed-twin.ug,
+/// seed 3 of a 2 × 1 building with stairs at `-e 1e-3`): the kept face
+/// takes the twin's contour, so the neighbour's edge is closed and no
+/// face lies on another. Before, one overlapping pair after ugclean.
+#[test]
+fn a_kept_face_closes_the_gap_its_removed_twin_leaves() {
+    let (out, r) = coincident_step_checked("clean/wall-face-in-front-of-a-removed-twin.ug", "1e-3");
+    assert!(
+        !out.contains("f s0w4r0.2.i1.c2 "),
+        "the facade piece goes:\n{out}"
+    );
+    assert!(
+        out.contains(
+            "f s0w1r0.2.i2 (slab0.2.i3.cv3 slab0.2.i3.cv2 slab0.2.i3.cv1 slab0.2.i3.cv4) wall;"
+        ),
+        "the wall's face takes the facade piece's contour:\n{out}"
+    );
+    assert_none(&r, DEFECTS, &out);
+    // The default ugclean (enclosed faces removed) too.
+    let src =
+        std::fs::read_to_string(fixture("clean/wall-face-in-front-of-a-removed-twin.ug")).unwrap();
+    let out = run_ok("ugclean", &["-e", "1e-3"], Some(src.as_bytes()));
+    let r: serde_json::Value = serde_json::from_str(&run_ok(
+        "ugcheck",
+        &["--json", "-e", "1e-3"],
+        Some(out.as_bytes()),
+    ))
+    .unwrap();
+    assert_none(&r, DEFECTS, &out);
+}
+
 /// A pair's moves that are left after others are vetoed must not bend the
 /// kept face either (fixtures/clean/vetoed-corners-bend-a-desk-bottom.ug,
 /// property seed 1693): before, three of five corners took the twin's
