@@ -372,50 +372,20 @@ fn take_twin_shapes(
             if removed[kept.idx()] {
                 continue;
             }
-            let shape: Vec<Vec<VertexId>> = m.faces[gone.idx()]
-                .contours
-                .iter()
-                .map(|c| squeeze(c, to))
-                .collect();
+            let Some(shape) = twin_shape(m, gone, to) else {
+                continue;
+            };
             let new_edges = edges_of(&shape);
-            if !new_edges.contains(&(e, !way))
-                || shape.iter().any(|c| {
-                    let mut d = c.clone();
-                    d.sort_unstable();
-                    d.dedup();
-                    c.len() < 3 || d.len() < c.len()
-                })
-            {
+            if !new_edges.contains(&(e, !way)) {
                 continue;
             }
             let old_edges = edges_of(&out.faces[kept.idx()].contours);
             if old_edges.iter().any(|&(x, _)| x == e) {
                 continue;
             }
-            // Such edges among those of the two shapes, before and after.
-            let mut near: Vec<Edge> = old_edges.iter().chain(&new_edges).map(|x| x.0).collect();
-            near.sort_unstable();
-            near.dedup();
-            let count = |uses: &FxHashMap<Edge, Vec<(FaceId, bool)>>| {
-                near.iter().filter(|x| bad(uses.get(x))).count()
-            };
-            let before = count(&uses);
-            let mut trial: FxHashMap<Edge, Vec<(FaceId, bool)>> = near
-                .iter()
-                .filter_map(|x| uses.get(x).map(|u| (*x, u.clone())))
-                .collect();
-            for (x, _) in &old_edges {
-                if let Some(u) = trial.get_mut(x) {
-                    u.retain(|(f, _)| *f != kept);
-                }
-            }
-            for &(x, w) in &new_edges {
-                trial.entry(x).or_default().push((kept, w));
-            }
-            if count(&trial) < before {
-                for (x, u) in trial {
-                    uses.insert(x, u);
-                }
+            if reshape_if(&mut uses, kept, &old_edges, &new_edges, |before, after| {
+                after < before
+            }) {
                 out.faces[kept.idx()].contours = shape;
                 reshaped += 1;
                 break;
@@ -446,26 +416,14 @@ fn close_twin_gaps(
 ) -> usize {
     let edges_of = |cs: &[Vec<VertexId>]| -> Vec<(Edge, bool)> { walked_edges(cs).collect() };
     let mut uses: Option<FxHashMap<Edge, Vec<(FaceId, bool)>>> = None;
-    let bad =
-        |u: Option<&Vec<(FaceId, bool)>>| u.is_some_and(|u| walked_twice_one_way(u, |_| true));
     let mut reshaped = 0;
     for &(gone, kept) in kept_for {
         if removed[kept.idx()] {
             continue;
         }
-        let shape: Vec<Vec<VertexId>> = m.faces[gone.idx()]
-            .contours
-            .iter()
-            .map(|c| squeeze(c, to))
-            .collect();
-        if shape.iter().any(|c| {
-            let mut d = c.clone();
-            d.sort_unstable();
-            d.dedup();
-            c.len() < 3 || d.len() < c.len()
-        }) {
+        let Some(shape) = twin_shape(m, gone, to) else {
             continue;
-        }
+        };
         let new_edges = edges_of(&shape);
         let old_edges = edges_of(&out.faces[kept.idx()].contours);
         // The twin shares no record with the removed face's shape.
@@ -483,34 +441,76 @@ fn close_twin_gaps(
         if !new_edges.iter().any(|(x, w)| open(uses, x, *w)) {
             continue;
         }
-        let mut near: Vec<Edge> = old_edges.iter().chain(&new_edges).map(|x| x.0).collect();
-        near.sort_unstable();
-        near.dedup();
-        let count = |uses: &FxHashMap<Edge, Vec<(FaceId, bool)>>| {
-            near.iter().filter(|x| bad(uses.get(x))).count()
-        };
-        let before = count(uses);
-        let mut trial: FxHashMap<Edge, Vec<(FaceId, bool)>> = near
-            .iter()
-            .filter_map(|x| uses.get(x).map(|u| (*x, u.clone())))
-            .collect();
-        for (x, _) in &old_edges {
-            if let Some(u) = trial.get_mut(x) {
-                u.retain(|(f, _)| *f != kept);
-            }
-        }
-        for &(x, w) in &new_edges {
-            trial.entry(x).or_default().push((kept, w));
-        }
-        if count(&trial) <= before {
-            for (x, u) in trial {
-                uses.insert(x, u);
-            }
+        if reshape_if(uses, kept, &old_edges, &new_edges, |before, after| {
+            after <= before
+        }) {
             out.faces[kept.idx()].contours = shape;
             reshaped += 1;
         }
     }
     reshaped
+}
+
+/// The contours of removed face `gone` with records mapped by `to`, if
+/// every contour keeps three or more distinct records and none twice.
+fn twin_shape(
+    m: &Model,
+    gone: FaceId,
+    to: &std::collections::BTreeMap<u32, u32>,
+) -> Option<Vec<Vec<VertexId>>> {
+    let shape: Vec<Vec<VertexId>> = m.faces[gone.idx()]
+        .contours
+        .iter()
+        .map(|c| squeeze(c, to))
+        .collect();
+    let sound = shape.iter().all(|c| {
+        let mut d = c.clone();
+        d.sort_unstable();
+        d.dedup();
+        c.len() >= 3 && d.len() == c.len()
+    });
+    sound.then_some(shape)
+}
+
+/// Whether face `kept` walking `new_edges` instead of `old_edges` passes
+/// `accept(before, after)`, given the number of edges walked twice one way
+/// among those of the two shapes before and after; if it does, `uses` is
+/// updated to it.
+fn reshape_if(
+    uses: &mut FxHashMap<Edge, Vec<(FaceId, bool)>>,
+    kept: FaceId,
+    old_edges: &[(Edge, bool)],
+    new_edges: &[(Edge, bool)],
+    accept: impl Fn(usize, usize) -> bool,
+) -> bool {
+    let bad =
+        |u: Option<&Vec<(FaceId, bool)>>| u.is_some_and(|u| walked_twice_one_way(u, |_| true));
+    let mut near: Vec<Edge> = old_edges.iter().chain(new_edges).map(|x| x.0).collect();
+    near.sort_unstable();
+    near.dedup();
+    let count = |uses: &FxHashMap<Edge, Vec<(FaceId, bool)>>| {
+        near.iter().filter(|x| bad(uses.get(x))).count()
+    };
+    let before = count(uses);
+    let mut trial: FxHashMap<Edge, Vec<(FaceId, bool)>> = near
+        .iter()
+        .filter_map(|x| uses.get(x).map(|u| (*x, u.clone())))
+        .collect();
+    for (x, _) in old_edges {
+        if let Some(u) = trial.get_mut(x) {
+            u.retain(|(f, _)| *f != kept);
+        }
+    }
+    for &(x, w) in new_edges {
+        trial.entry(x).or_default().push((kept, w));
+    }
+    if !accept(before, count(&trial)) {
+        return false;
+    }
+    for (x, u) in trial {
+        uses.insert(x, u);
+    }
+    true
 }
 
 /// Contour `c` with each record replaced as `to` says (record → the one it
