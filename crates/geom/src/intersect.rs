@@ -276,6 +276,17 @@ pub fn relate(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Relation {
     }
 }
 
+/// The point tried for the stretch of the planes' line between boundary
+/// events `k` and `k + 1`: at a steep angle the middle of their points as
+/// tried (`near`), else `on_line`, the middle of the stretch on the line.
+fn stretch_middle(steep: bool, near: &[DVec3], k: usize, on_line: DVec3) -> DVec3 {
+    if steep {
+        (near[k] + near[k + 1]) / 2.0
+    } else {
+        on_line
+    }
+}
+
 /// [`relate`] by the line where the planes meet, point contacts taken as
 /// intersections.
 fn relate_on_line(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Relation {
@@ -310,11 +321,7 @@ fn relate_on_line(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Relation {
     for (k, &t) in ts.iter().enumerate() {
         samples.push(near[k]);
         if let Some(&t2) = ts.get(k + 1) {
-            samples.push(if steep {
-                (near[k] + near[k + 1]) / 2.0
-            } else {
-                p0 + dir * ((t + t2) / 2.0)
-            });
+            samples.push(stretch_middle(steep, &near, k, p0 + dir * ((t + t2) / 2.0)));
         }
     }
     let mut touch = false;
@@ -608,11 +615,7 @@ pub fn cut_segments(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Vec<(DVec3, DVec3)>
         // at 20° on a slab's eave, both planar only within epsilon;
         // property seed 27265), and its middle is no point of either
         // boundary, while the edge's middle is.
-        let s = if steep {
-            (near[k] + near[k + 1]) / 2.0
-        } else {
-            p0 + dir * ((w[0] + w[1]) / 2.0)
-        };
+        let s = stretch_middle(steep, &near, k, p0 + dir * ((w[0] + w[1]) / 2.0));
         let la = a.locate(s, eps);
         if la == Location::Outside {
             continue;

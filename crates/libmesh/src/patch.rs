@@ -280,7 +280,7 @@ fn prepare_joining(
     }
     let faces: Vec<FaceId> = mesh
         .faces()
-        .filter(|&f| region.is_none_or(|r| r.has_face(f)))
+        .filter(|&f| winged::weld::face_in(region, f))
         .collect();
     for f in faces {
         let name = mesh
@@ -540,26 +540,25 @@ fn feet_and_thin(m: &Model, eps: f64, planes: &FacePlanes) -> (Feet, Thin) {
                 // the triangle lay on the globe's patch, folded at 25°,
                 // property seed 13674). The corner's triangle reaches along
                 // the side instead (or gets a point across its jog).
-                let at_corner =
-                    |e: &(VertexId, VertexId)| e.0 == g.0 || e.0 == g.1 || e.1 == g.0 || e.1 == g.1;
-                let corner = mine
-                    .clone()
-                    .any(|e| at_corner(&e) && m.pos(e.0).distance(m.pos(e.1)) < JOG * eps)
-                    || (d > eps
-                        && mine.clone().any(|e| {
-                            at_corner(&e) && {
-                                let foot = p + (q - p) * t;
-                                let (a, b) = (m.pos(e.0), m.pos(e.1));
-                                let dir = (b - a).normalize_or_zero();
-                                let w = foot - a;
-                                let across = w - dir * w.dot(dir);
-                                let h = across.length();
-                                h > 0.0
-                                    && fold_sin(m, planes, &|g| fold_normal(m, g), f, e, across / h)
-                                        .is_some_and(|s| h * s < 3.0 * eps)
-                            }
-                        }));
-                if d > eps && !corner {
+                // Nor where a face is folded back onto this one along that
+                // edge and the foot lies within 3 epsilon / sin of it (see
+                // above).
+                let folded = |e: (VertexId, VertexId)| {
+                    let foot = p + (q - p) * t;
+                    let (a, b) = (m.pos(e.0), m.pos(e.1));
+                    let dir = (b - a).normalize_or_zero();
+                    let w = foot - a;
+                    let across = w - dir * w.dot(dir);
+                    let h = across.length();
+                    h > 0.0
+                        && fold_sin(m, planes, &|g| fold_normal(m, g), f, e, across / h)
+                            .is_some_and(|s| h * s < 3.0 * eps)
+                };
+                let corner = |e: (VertexId, VertexId)| {
+                    (e.0 == g.0 || e.0 == g.1 || e.1 == g.0 || e.1 == g.1)
+                        && (m.pos(e.0).distance(m.pos(e.1)) < JOG * eps || folded(e))
+                };
+                if d > eps && !mine.clone().any(corner) {
                     out.entry(g).or_default().push(t);
                 }
             }
@@ -779,29 +778,26 @@ impl Ctx<'_> {
             // In a model without intersections such a face has one of
             // the edge's ends (its plane meets the edge there at a small
             // angle); any other would be crossed by the edge.
-            let mut among: Vec<u32> = self.planes.around(key.0).to_vec();
-            among.extend_from_slice(self.planes.around(key.1));
-            among.sort_unstable();
-            among.dedup();
+            let ends = [key.0, key.1];
             ts.retain(|&(t, _)| {
-                self.planes
-                    .resting_among(
-                        m,
-                        p + (q - p) * t,
-                        eps,
-                        &among,
-                        |face| {
-                            let mut has = [false; 2];
-                            for &w in face.contours.iter().flatten() {
-                                has[0] |= w == key.0;
-                                has[1] |= w == key.1;
-                            }
-                            has[0] && has[1]
-                        },
-                        // The edge lying in the plane.
-                        |n, c| (p - c).dot(n).abs() <= eps && (q - c).dot(n).abs() <= eps,
-                    )
-                    .is_empty()
+                let x = p + (q - p) * t;
+                !(0..2).any(|s| {
+                    self.planes.around_range(ends[s]).any(|i| {
+                        let k = self.planes.at[i];
+                        // Not a face with the edge (it has both ends).
+                        if self.planes.around(ends[1 - s]).binary_search(&k).is_ok() {
+                            return false;
+                        }
+                        // Nor one the edge lies in.
+                        let Some((n, c)) = self.planes.plane_of(m, k) else {
+                            return false;
+                        };
+                        if (p - c).dot(n).abs() <= eps && (q - c).dot(n).abs() <= eps {
+                            return false;
+                        }
+                        self.planes.rests_in(m, x, eps, k)
+                    })
+                })
             });
             let pts: Vec<VertexId> = ts
                 .iter()
@@ -1032,9 +1028,14 @@ impl FacePlanes {
 
     /// The faces (indices into `faces`) that have vertex `v`.
     fn around(&self, v: VertexId) -> &[u32] {
+        &self.at[self.around_range(v)]
+    }
+
+    /// Where [`FacePlanes::around`]'s faces lie in `at`.
+    fn around_range(&self, v: VertexId) -> std::ops::Range<usize> {
         match self.start.get(v.idx()..v.idx() + 2) {
-            Some(&[a, b]) => &self.at[a as usize..b as usize],
-            _ => &[],
+            Some(&[a, b]) => a as usize..b as usize,
+            _ => 0..0,
         }
     }
 
@@ -1053,53 +1054,35 @@ impl FacePlanes {
         })
     }
 
-    /// The faces among `among` (indices into `faces`) that `p` rests
-    /// inside: within `eps` of the plane, inside the contours by more than
-    /// `eps`; faces for which `skip` holds are not tried, nor those for
-    /// which `skip_plane` holds of the plane (its unit normal and a point
-    /// on it).
-    fn resting_among(
-        &mut self,
-        m: &Model,
-        p: DVec3,
-        eps: f64,
-        among: &[u32],
-        skip: impl Fn(&Face) -> bool,
-        skip_plane: impl Fn(DVec3, DVec3) -> bool,
-    ) -> Vec<u32> {
-        let mut out = Vec::new();
-        for &k in among {
-            let face = &m.faces[self.faces[k as usize].idx()];
-            // The plane first (cheap), the face's own test, then its
-            // contours in its frame.
-            let Some((n, centre)) = self.plane_of(m, k) else {
-                continue;
-            };
-            if (p - centre).dot(n).abs() > eps || skip_plane(n, centre) || skip(face) {
-                continue;
-            }
-            let Some((frame, c2)) = self
-                .flat
-                .entry(k)
-                .or_insert_with(|| {
-                    let pts = face_points(m, face);
-                    let frame = mesh_frame(&pts)?;
-                    let c2 = pts
-                        .iter()
-                        .map(|c| c.iter().map(|&q| frame.to_2d(q)).collect())
-                        .collect();
-                    Some((frame, c2))
-                })
-                .as_ref()
-            else {
-                continue;
-            };
-            // Inside by more than epsilon.
-            if geom::intersect::locate_eps(frame.to_2d(p), c2, eps) == geom::Location::Inside {
-                out.push(k);
-            }
+    /// Whether `p` rests inside face `k` (an index into `faces`): within
+    /// `eps` of its plane and inside its contours by more than `eps`, in
+    /// its mesh frame.
+    fn rests_in(&mut self, m: &Model, p: DVec3, eps: f64, k: u32) -> bool {
+        // The plane first (cheap), then the contours in the face's frame.
+        let Some((n, centre)) = self.plane_of(m, k) else {
+            return false;
+        };
+        if (p - centre).dot(n).abs() > eps {
+            return false;
         }
-        out
+        let face = &m.faces[self.faces[k as usize].idx()];
+        let Some((frame, c2)) = self
+            .flat
+            .entry(k)
+            .or_insert_with(|| {
+                let pts = face_points(m, face);
+                let frame = mesh_frame(&pts)?;
+                let c2 = pts
+                    .iter()
+                    .map(|c| c.iter().map(|&q| frame.to_2d(q)).collect())
+                    .collect();
+                Some((frame, c2))
+            })
+            .as_ref()
+        else {
+            return false;
+        };
+        geom::intersect::locate_eps(frame.to_2d(p), c2, eps) == geom::Location::Inside
     }
 }
 
@@ -1201,17 +1184,7 @@ fn resting_points(
             if neighbours(v).any(|w| (m.pos(w) - centre).dot(n).abs() <= eps) {
                 continue;
             }
-            if !planes
-                .resting_among(
-                    m,
-                    m.pos(VertexId(v)),
-                    eps,
-                    &[k as u32],
-                    |_| false,
-                    |_, _| false,
-                )
-                .is_empty()
-            {
+            if planes.rests_in(m, m.pos(VertexId(v)), eps, k as u32) {
                 found.push((v, k as u32));
             }
         }

@@ -41,7 +41,7 @@ impl Snapper {
             created: 0,
         };
         for v in mesh.vertices() {
-            if region.is_none_or(|r| r.has_vertex(v)) {
+            if crate::weld::vertex_in(region, v) {
                 s.insert(v, mesh.pos(v));
             }
         }
@@ -572,7 +572,7 @@ pub fn repair_all_in(
     let mut snap = Snapper::new_in(mesh, eps, region);
     let mut dirty: Vec<FaceId> = mesh
         .faces()
-        .filter(|&f| region.is_none_or(|r| r.has_face(f)))
+        .filter(|&f| crate::weld::face_in(region, f))
         .collect();
     for _ in 0..4 {
         let created = snap.created;

@@ -49,11 +49,13 @@ impl Region {
     }
 }
 
-fn face_in(region: Option<&Region>, f: FaceId) -> bool {
+/// Whether face `f` is in `region` (every face is in none).
+pub fn face_in(region: Option<&Region>, f: FaceId) -> bool {
     region.is_none_or(|r| r.has_face(f))
 }
 
-fn vertex_in(region: Option<&Region>, v: VertexId) -> bool {
+/// Whether vertex `v` is in `region` (every vertex is in none).
+pub fn vertex_in(region: Option<&Region>, v: VertexId) -> bool {
     region.is_none_or(|r| r.has_vertex(v))
 }
 
