@@ -1076,6 +1076,64 @@ mod tests {
         assert_eq!(s.inserted, 0, "{s:?}");
     }
 
+    /// Two corners 1 epsilon either side of a short edge (2 epsilon long),
+    /// each within epsilon of its interior, with the edge's ends within
+    /// epsilon of the segment between them (property seed 2010, placed: a
+    /// ramp's and a railing's pieces at a desk side's ledge; the points
+    /// are theirs, in epsilons). Both in, the edge would zig-zag and the
+    /// passes brought its ends back into it until they ran out, leaving
+    /// spikes and a T-vertex; one goes in, and the other is then farther
+    /// than epsilon from both new edges.
+    #[test]
+    fn corners_that_would_make_an_edge_zig_zag_go_in_one_at_most() {
+        let e = 0.01;
+        let p = |x: f64, y: f64, z: f64| format!("{} {} {}", x * e, y * e, z * e);
+        let src = format!(
+            "v p0 {}; v p1 {}; v p2 {}; v p3 {};\
+             v q0 {}; v q3 {}; v r1 {}; v r2 {}; v s1 {}; v s2 {};\
+             f side (p0 p3 q3 q0); f rail (p1 r1 r2); f ramp (p2 s2 s1);",
+            p(0.0, 0.0, 0.0),
+            p(1.0306, 0.5986, 0.1016),
+            p(-0.8164, 1.4071, 0.0),
+            p(0.2145, 2.0052, 0.1017),
+            p(0.0, 0.0, -100.0),
+            p(0.2145, 2.0052, -99.9),
+            p(101.0, 0.6, 0.1),
+            p(101.0, 0.6, 100.0),
+            p(-100.8, 1.4, 0.0),
+            p(-100.8, 1.4, 100.0),
+        );
+        let mut m = mesh(&src);
+        let s = split_edges(&mut m, e);
+        m.validate().unwrap();
+        assert_eq!((s.inserted, s.edges), (1, 1), "{s:?}");
+        let out = m.to_model();
+        let mut used: Vec<VertexId> = Vec::new();
+        for f in out.top_faces() {
+            for c in &out.faces[f.idx()].contours {
+                let mut seen = c.clone();
+                seen.sort_unstable();
+                seen.dedup();
+                assert_eq!(seen.len(), c.len(), "{}", text(&m));
+                used.extend(c);
+            }
+        }
+        // No T-vertex is left.
+        for f in out.top_faces() {
+            for c in &out.faces[f.idx()].contours {
+                for i in 0..c.len() {
+                    let (a, b) = (c[i], c[(i + 1) % c.len()]);
+                    for &v in &used {
+                        if v != a && v != b {
+                            let on = geom::on_edge_interior(out.pos(v), out.pos(a), out.pos(b), e);
+                            assert!(on.is_none(), "{}", text(&m));
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn several_t_vertices_along_one_edge_go_in_order_in_every_face() {
         let mut m = mesh(

@@ -506,6 +506,62 @@ pub struct Split {
     pub passes: usize,
 }
 
+/// Whether the chain of points `pts` (an edge's ends with the vertices to
+/// go into it between them) leaves a point within `eps` of the interior of
+/// a chain segment it is not an end of, or one of `left` (vertices on the
+/// edge left out) within `eps` of the interior of any segment: splitting
+/// the segments again would bring the point back.
+fn zig_zags(pts: &[DVec3], left: &[DVec3], eps: f64) -> bool {
+    let on = |p: DVec3, j: usize| on_edge_interior(p, pts[j], pts[j + 1], eps).is_some();
+    (0..pts.len() - 1).any(|j| {
+        (0..pts.len()).any(|i| i != j && i != j + 1 && on(pts[i], j))
+            || left.iter().any(|&p| on(p, j))
+    })
+}
+
+/// At most this many vertices on one edge are tried in subsets when all
+/// of them together would make it zig-zag (see [`split_edges`]).
+const ZIG_ZAG_SUBSETS: usize = 4;
+
+/// The vertices of `on` (within `eps` of the interior of the edge from `a`
+/// to `b`, in order along it) to insert: all of them, unless the edge
+/// through them would zig-zag; then the largest subset (the first in
+/// order among those as large) that leaves no zig-zag and none of the
+/// others within `eps` of the new edges, when there is one.
+fn insertable(mesh: &Mesh, a: VertexId, b: VertexId, on: Vec<VertexId>, eps: f64) -> Vec<VertexId> {
+    let chain = |keep: &[VertexId]| -> Vec<DVec3> {
+        std::iter::once(a)
+            .chain(keep.iter().copied())
+            .chain([b])
+            .map(|v| mesh.pos(v))
+            .collect()
+    };
+    if on.len() < 2 || on.len() > ZIG_ZAG_SUBSETS || !zig_zags(&chain(&on), &[], eps) {
+        return on;
+    }
+    let k = on.len();
+    for size in (1..k).rev() {
+        // Subsets of `size` in lexicographic order of their positions.
+        let mut masks: Vec<u32> = (0..1u32 << k)
+            .filter(|m| m.count_ones() as usize == size)
+            .collect();
+        masks.sort_by_key(|&m| {
+            (0..k)
+                .filter(|&i| m & (1 << i) != 0)
+                .collect::<Vec<usize>>()
+        });
+        for m in masks {
+            let (keep, left): (Vec<usize>, Vec<usize>) = (0..k).partition(|&i| m & (1 << i) != 0);
+            let keep: Vec<VertexId> = keep.into_iter().map(|i| on[i]).collect();
+            let left: Vec<DVec3> = left.into_iter().map(|i| mesh.pos(on[i])).collect();
+            if !zig_zags(&chain(&keep), &left, eps) {
+                return keep;
+            }
+        }
+    }
+    on
+}
+
 /// The vertices of `index` that lie within `eps` of the interior of edge `e`
 /// (farther than `eps` from both ends), still used by a face, in order from
 /// `e.v[0]` to `e.v[1]`.
@@ -536,6 +592,18 @@ fn vertices_on_edge(mesh: &Mesh, index: &Points, e: EdgeId, eps: f64) -> Vec<Ver
 /// Each face is rewritten once per pass; later passes check only the edges
 /// the previous one created (a vertex inserted slightly off the line can
 /// bring another within reach), until nothing changes.
+///
+/// Where all the vertices on an edge would make it zig-zag (an end or one
+/// of them within `eps` of the interior of a new edge), inserting them
+/// cannot end: each pass brings the points back into the new edges. Seen
+/// on property seed 2010 (placed): a ramp's and a railing's coincident
+/// pieces, 1.6 epsilon apart, cornered 1 epsilon either side of a desk
+/// side's ledge, an edge 2 epsilon long, whose ends lay within epsilon of
+/// the edge between the two corners; the passes ran out with the contours
+/// full of spikes, and a T-vertex was left. Then the largest subset of
+/// them that leaves no zig-zag and none of the others within `eps` of
+/// the new edges goes in ([`insertable`]; there one corner: the other is
+/// then farther than epsilon from both new edges).
 pub fn split_edges(mesh: &mut Mesh, eps: f64) -> Split {
     split_edges_in(mesh, eps, None)
 }
@@ -576,6 +644,8 @@ pub fn split_edges_in(mesh: &mut Mesh, eps: f64, region: Option<&Region>) -> Spl
             if on.is_empty() {
                 continue;
             }
+            let [a, b] = mesh.edge(e).v;
+            let on = insertable(mesh, a, b, on, eps);
             st.inserted += on.len();
             st.edges += 1;
             touched.extend(mesh.edge(e).faces());
