@@ -154,8 +154,11 @@ const FOUND_CURVED_WITH_STAIRS: [u64; 3] = [25191, 8627, 42050];
 /// a T-vertex after the chain where a ramp's and a railing's coincident
 /// pieces were cornered 1 epsilon either side of a desk side's ledge 2
 /// epsilon long, whose ends lay within epsilon of the segment between
-/// the two corners (the edge split cannot take both: one goes in now).
-const FOUND_PLACED_LARGER: [u64; 1] = [2010];
+/// the two corners (the edge split cannot take both: one goes in now);
+/// 2074, two intersecting pairs after the chain, a column's and a desk's
+/// faces sunk into a floor slab at 0.55° to each other, cut and meeting
+/// again in each of ugisect's rounds until the sixth (at most 4 before).
+const FOUND_PLACED_LARGER: [u64; 2] = [2010, 2074];
 
 fn size(seed: u64) -> Cad {
     if FOUND_LARGER.contains(&seed) || FOUND_PLACED_LARGER.contains(&seed) {
