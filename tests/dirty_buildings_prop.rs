@@ -643,8 +643,10 @@ fn more_seeds() {
 /// When this was added, 1,360 seeds passed so by hand (tilted or
 /// shuffled or both, with every kind of dirt, triangles, stairs, curved
 /// things, a 10× epsilon); of 60 seeds of 3 × 2 rooms on 2 storeys,
-/// placed, tilted and shuffled, two failed, 2010 placed alone (see
-/// docs/performance.md, thirtieth session).
+/// placed, tilted and shuffled, two failed: 2010, which failed placed
+/// alone too ([`FOUND_PLACED_LARGER`]; docs/decisions.md, "An edge split
+/// that would zig-zag takes only some of its vertices"), and 2020 (with
+/// `--keep-enclosed` only).
 #[test]
 fn dirty_buildings_tilted_and_shuffled() {
     run_moved(

@@ -539,24 +539,19 @@ fn insertable(mesh: &Mesh, a: VertexId, b: VertexId, on: Vec<VertexId>, eps: f64
     if on.len() < 2 || on.len() > ZIG_ZAG_SUBSETS || !zig_zags(&chain(&on), &[], eps) {
         return on;
     }
+    // The proper subsets, largest first; as large, in lexicographic order
+    // of their positions: with position i as bit k - 1 - i, that is
+    // descending order of the masks (a stable sort keeps it).
     let k = on.len();
-    for size in (1..k).rev() {
-        // Subsets of `size` in lexicographic order of their positions.
-        let mut masks: Vec<u32> = (0..1u32 << k)
-            .filter(|m| m.count_ones() as usize == size)
-            .collect();
-        masks.sort_by_key(|&m| {
-            (0..k)
-                .filter(|&i| m & (1 << i) != 0)
-                .collect::<Vec<usize>>()
-        });
-        for m in masks {
-            let (keep, left): (Vec<usize>, Vec<usize>) = (0..k).partition(|&i| m & (1 << i) != 0);
-            let keep: Vec<VertexId> = keep.into_iter().map(|i| on[i]).collect();
-            let left: Vec<DVec3> = left.into_iter().map(|i| mesh.pos(on[i])).collect();
-            if !zig_zags(&chain(&keep), &left, eps) {
-                return keep;
-            }
+    let bit = |i: usize| 1u32 << (k - 1 - i);
+    let mut masks: Vec<u32> = (1..(1u32 << k) - 1).rev().collect();
+    masks.sort_by_key(|m| std::cmp::Reverse(m.count_ones()));
+    for m in masks {
+        let (keep, left): (Vec<usize>, Vec<usize>) = (0..k).partition(|&i| m & bit(i) != 0);
+        let keep: Vec<VertexId> = keep.into_iter().map(|i| on[i]).collect();
+        let left: Vec<DVec3> = left.into_iter().map(|i| mesh.pos(on[i])).collect();
+        if !zig_zags(&chain(&keep), &left, eps) {
+            return keep;
         }
     }
     on
