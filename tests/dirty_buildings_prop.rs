@@ -650,7 +650,7 @@ fn more_seeds() {
 #[test]
 fn dirty_buildings_tilted_and_shuffled() {
     run_moved(
-        (1200..1224).collect(),
+        (1200..1216).collect(),
         Moves {
             tilted: true,
             shuffled: true,
