@@ -656,6 +656,35 @@ fn sharing_a_pairs_records_makes_no_t_vertex() {
     assert!(!out.contains("f wing0.0.i2 "), "{out}");
 }
 
+/// A coincident pair's records are not shared when that would drag a face
+/// naming them over a face it lay back to back with
+/// (fixtures/clean/pier-top-dragged-over-a-ceiling-strip.ug, property seed
+/// 2198 placed on a site): before, one overlapping pair after ugclean.
+#[test]
+fn sharing_a_pairs_records_makes_no_overlap() {
+    let eps = "2.5566894059154372e-2";
+    let (out, r) = coincident_step_checked("clean/pier-top-dragged-over-a-ceiling-strip.ug", eps);
+    assert_none(
+        &r,
+        &[
+            "overlapping",
+            "degenerate",
+            "intersecting",
+            "tvertices",
+            "nonplanar",
+        ],
+        &out,
+    );
+    // The pair is still resolved: the later face of the same material goes,
+    // and the pier top keeps its corners.
+    assert!(out.contains("f s0w2r1.4.i1 "), "{out}");
+    assert!(!out.contains("f s0w12r0.4.i13 "), "{out}");
+    assert!(
+        out.contains("f s0w3p0.1.i1 (s0w3p0.v7 s0w3p0.v6 s0w2r1.4.iv952 s0w2r1.3.iv945)"),
+        "{out}"
+    );
+}
+
 /// Two coincident end pieces, the removed one naming a corner the kept one
 /// lacks (fixtures/clean/end-piece-missing-a-corner.ug, property seed 856:
 /// a wing wall's end 1.1 epsilon past the other's, and the facade sliver

@@ -185,11 +185,19 @@ fn length_as_percentage_and_bad_lengths() {
         a.lines().filter(|l| l.starts_with("f ")).count(),
         b.lines().filter(|l| l.starts_with("f ")).count()
     );
-    for bad in ["0", "-1", "abc", "%"] {
+    for bad in ["0", "-1", "abc", "%", "0%", "-2%"] {
         let out = run("ugcut", &["-l", bad, p], None);
         assert_eq!(out.status.code(), Some(2), "-l {bad}");
         assert!(out.stdout.is_empty());
     }
+    // A model with nothing in it (every face gone upstream) goes through
+    // at the default length, which is 2% of no size.
+    let empty = "c_rgb wall 0.5 0.5 0.5;\n";
+    let out = run_ok("ugcut", &[], Some(empty.as_bytes()));
+    assert_eq!(out.lines().filter(|l| l.starts_with("f ")).count(), 0);
+    assert!(out.contains("c_rgb wall"), "{out}");
+    let out = run("ugcut", &["-l", "-2%"], Some(empty.as_bytes()));
+    assert_eq!(out.status.code(), Some(2), "-l -2% on an empty model");
     // Without -l, the default length is 2% of the diagonal.
     assert_eq!(
         run_ok("ugcut", &[p], None),

@@ -93,8 +93,18 @@ fn main() -> std::process::ExitCode {
     let c = &args.common;
     cli::filter(c, args.epsilon, |model, eps| {
         let diag = model.bounds().map_or(0.0, |(lo, hi)| (hi - lo).length());
+        // A model without extent (no faces, or all at one point) has
+        // nothing to mesh: any length does, and the percentage of its size
+        // would be none (an empty model goes through, as through the
+        // other filters).
+        let flat = diag == 0.0;
         let len = match args.len.strip_suffix('%') {
-            Some(p) => p.trim().parse::<f64>().ok().map(|p| p / 100.0 * diag),
+            Some(p) => p
+                .trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|p| *p > 0.0)
+                .map(|p| if flat { 1.0 } else { p / 100.0 * diag }),
             None => args.len.trim().parse::<f64>().ok(),
         };
         let len = len.filter(|l| l.is_finite() && *l > 0.0).ok_or_else(|| {
@@ -103,7 +113,7 @@ fn main() -> std::process::ExitCode {
                 args.len
             ))
         })?;
-        if len <= 10.0 * eps {
+        if len <= 10.0 * eps && !flat {
             return Err(cli::Failure::input(format!(
                 "error: -l {len} is not larger than 10 × epsilon ({eps:e})"
             )));

@@ -828,6 +828,65 @@ pub fn coplanar_pairs_with(
     classify(geoms, eps, Want::Coplanar, among, epsilons)
 }
 
+/// How two faces already found coplanar share their plane: `Coincident`
+/// (the same region, facing the same way), `BackToBack` (the same region,
+/// facing opposite ways), `Overlap` (a common area over epsilon² that is
+/// not all of both), or `None` (nothing in common but slivers narrower
+/// than `eps`). What [`classify_pairs`] reports for a coplanar pair; the
+/// tools that move vertices use it to see whether a move makes a pair
+/// overlap.
+pub fn coplanar_kind(ga: &FaceGeom, gb: &FaceGeom, eps: f64) -> Option<PairKind> {
+    // Only contours reaching the common box matter (one outside it cannot
+    // surround any of it): a storey's floor with hundreds of holes against
+    // a rug is the rug's neighbourhood.
+    let ((alo, ahi), (blo, bhi)) = (ga.bounds(), gb.bounds());
+    let pad = DVec3::splat(4.0 * eps);
+    let (wlo, whi) = (alo.max(blo) - pad, ahi.min(bhi) + pad);
+    let near = |b: &(DVec3, DVec3)| b.0.cmple(whi).all() && b.1.cmpge(wlo).all();
+    let mut dropped = false;
+    let a2: Vec<Vec<DVec2>> = ga
+        .contours_2d
+        .iter()
+        .zip(&ga.contour_boxes)
+        .filter(|(_, b)| {
+            near(b) || {
+                dropped = true;
+                false
+            }
+        })
+        .map(|(c, _)| c.clone())
+        .collect();
+    let b2: Vec<Vec<DVec2>> = gb
+        .contours
+        .iter()
+        .zip(&gb.contour_boxes)
+        .filter(|(_, b)| {
+            near(b) || {
+                dropped = true;
+                false
+            }
+        })
+        .map(|(c, _)| c.iter().map(|&p| ga.frame.to_2d(p)).collect())
+        .collect();
+    // Snap rounding at epsilon drops every sliver narrower than epsilon:
+    // what is left is a real overlap, however small.
+    let (cov, clipped) = coverage_near(&a2, &b2, eps);
+    let clipped = clipped || dropped;
+    let ov = cov.common;
+    let tol = eps * eps;
+    if ov > tol {
+        let same_region = !clipped && cov.only_a <= tol && cov.only_b <= tol;
+        let same_side = ga.plane.n.dot(gb.plane.n) > 0.0;
+        Some(match (same_region, same_side) {
+            (true, true) => PairKind::Coincident,
+            (true, false) => PairKind::BackToBack,
+            (false, _) => PairKind::Overlap(ov),
+        })
+    } else {
+        None
+    }
+}
+
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Want {
     All,
@@ -917,60 +976,7 @@ fn classify(
                 let kind = match rel {
                     Relation::Intersect => Some(PairKind::Intersect),
                     Relation::Coplanar if want == Want::Intersecting => None,
-                    Relation::Coplanar => {
-                        // Only contours reaching the common box matter (one
-                        // outside it cannot surround any of it): a storey's
-                        // floor with hundreds of holes against a rug is the
-                        // rug's neighbourhood.
-                        let ((alo, ahi), (blo, bhi)) = (ga.bounds(), gb.bounds());
-                        let pad = DVec3::splat(4.0 * eps);
-                        let (wlo, whi) = (alo.max(blo) - pad, ahi.min(bhi) + pad);
-                        let near =
-                            |b: &(DVec3, DVec3)| b.0.cmple(whi).all() && b.1.cmpge(wlo).all();
-                        let mut dropped = false;
-                        let a2: Vec<Vec<DVec2>> = ga
-                            .contours_2d
-                            .iter()
-                            .zip(&ga.contour_boxes)
-                            .filter(|(_, b)| {
-                                near(b) || {
-                                    dropped = true;
-                                    false
-                                }
-                            })
-                            .map(|(c, _)| c.clone())
-                            .collect();
-                        let b2: Vec<Vec<DVec2>> = gb
-                            .contours
-                            .iter()
-                            .zip(&gb.contour_boxes)
-                            .filter(|(_, b)| {
-                                near(b) || {
-                                    dropped = true;
-                                    false
-                                }
-                            })
-                            .map(|(c, _)| c.iter().map(|&p| ga.frame.to_2d(p)).collect())
-                            .collect();
-                        // Snap rounding at epsilon drops every sliver
-                        // narrower than epsilon: what is left is a real
-                        // overlap, however small.
-                        let (cov, clipped) = coverage_near(&a2, &b2, eps);
-                        let clipped = clipped || dropped;
-                        let ov = cov.common;
-                        let tol = eps * eps;
-                        if ov > tol {
-                            let same_region = !clipped && cov.only_a <= tol && cov.only_b <= tol;
-                            let same_side = ga.plane.n.dot(gb.plane.n) > 0.0;
-                            Some(match (same_region, same_side) {
-                                (true, true) => PairKind::Coincident,
-                                (true, false) => PairKind::BackToBack,
-                                (false, _) => PairKind::Overlap(ov),
-                            })
-                        } else {
-                            None
-                        }
-                    }
+                    Relation::Coplanar => coplanar_kind(ga, gb, eps),
                     Relation::Disjoint | Relation::Touch => None,
                 };
                 if let Some(k) = kind {
