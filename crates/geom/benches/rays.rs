@@ -7,7 +7,7 @@
 //! * `occluded`: segments between random points of a room and of a room
 //!   up to two away (what `ugrad`'s shots and tail cast), any hit.
 //!
-//! `cargo bench -p geom`.
+//! `cargo bench -p geom --features bench`.
 
 use std::hint::black_box;
 

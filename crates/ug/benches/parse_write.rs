@@ -5,8 +5,8 @@
 //! decimals (millimetres, 0–3 decimals), a tenth of them full 17-digit values
 //! (as after rotations).
 //!
-//!     cargo bench -p ug --bench parse_write
-//!     cargo bench -p ug --bench parse_write -- --quick      (a fast estimate)
+//!     cargo bench -p ug --features bench --bench parse_write
+//!     cargo bench -p ug --features bench --bench parse_write -- --quick      (a fast estimate)
 
 use std::fmt::Write as _;
 use std::hint::black_box;
