@@ -563,8 +563,12 @@ fn coincident_step_checked(path: &str, eps: &str) -> (String, serde_json::Value)
 /// A kept face on records of its own 1.6 epsilon from its removed twin's,
 /// which a neighbour of the twin shares (fixtures/clean/wall-face-in-front-of-a-removed-twin.ug,
 /// seed 3 of a 2 × 1 building with stairs at `-e 1e-3`): the kept face
-/// takes the twin's contour, so the neighbour's edge is closed and no
-/// face lies on another. Before, one overlapping pair after ugclean.
+/// comes to walk the neighbour's edge (it took the twin's contour until
+/// 2026-12-06; now it takes the two records of that edge, its upper
+/// corners staying where taking the others would have made the first
+/// pair's faces overlap for a moment), so the neighbour's edge is closed
+/// and no face lies on another. Before, one overlapping pair after
+/// ugclean.
 #[test]
 fn a_kept_face_closes_the_gap_its_removed_twin_leaves() {
     let (out, r) = coincident_step_checked("clean/wall-face-in-front-of-a-removed-twin.ug", "1e-3");
@@ -572,11 +576,19 @@ fn a_kept_face_closes_the_gap_its_removed_twin_leaves() {
         !out.contains("f s0w4r0.2.i1.c2 "),
         "the facade piece goes:\n{out}"
     );
+    let wall = out
+        .lines()
+        .find(|l| l.starts_with("f s0w1r0.2.i2 "))
+        .unwrap_or_else(|| panic!("the wall's face stays:\n{out}"));
+    assert!(
+        wall.contains("slab0.2.i3.cv1 slab0.2.i3.cv4"),
+        "the wall's face walks the facade neighbour's edge:\n{out}"
+    );
     assert!(
         out.contains(
-            "f s0w1r0.2.i2 (slab0.2.i3.cv3 slab0.2.i3.cv2 slab0.2.i3.cv1 slab0.2.i3.cv4) wall;"
+            "f s0w4r0.2.i5.c3 (slab0.2.i4.cv5 slab0.2.i4.cv6 slab0.2.i3.cv4 slab0.2.i3.cv1) facade;"
         ),
-        "the wall's face takes the facade piece's contour:\n{out}"
+        "{out}"
     );
     assert_none(&r, DEFECTS, &out);
     // The default ugclean (enclosed faces removed) too.
@@ -682,6 +694,63 @@ fn sharing_a_pairs_records_makes_no_overlap() {
     assert!(
         out.contains("f s0w3p0.1.i1 (s0w3p0.v7 s0w3p0.v6 s0w2r1.4.iv952 s0w2r1.3.iv945)"),
         "{out}"
+    );
+}
+
+/// Nor when it would drag a face that is not kept over one beside it,
+/// facing the same way (fixtures/clean/pier-face-dragged-past-a-notch.ug,
+/// property seed 45 at 100 times the default epsilon): before, one
+/// overlapping pair after ugclean.
+#[test]
+fn sharing_a_pairs_records_drags_no_face_over_its_neighbour() {
+    let (out, r) = coincident_step_checked(
+        "clean/pier-face-dragged-past-a-notch.ug",
+        "0.000979052158071641",
+    );
+    assert_none(&r, DEFECTS, &out);
+    assert!(!out.contains("f s0w6r0.0.i1.c2 "), "{out}");
+    // The pier's face keeps its corners, in the notch.
+    assert!(
+        out.contains("f s0w1p1.4.dup.i1 (s0w1p1.v3 s0w1p1.v2 slab0.1.iv15 slab0.1.iv14) wall;"),
+        "{out}"
+    );
+}
+
+/// Nor when the pairs' moves together would move a kept face over a face
+/// it lies back to back with (fixtures/clean/wing-slab-side-moved-over-a-sliver.ug,
+/// property seed 163 at 100 times the default epsilon): before, an
+/// overlapping pair and an inconsistently oriented edge after ugclean.
+#[test]
+fn the_moves_together_move_no_kept_face_over_a_neighbour() {
+    let (out, r) = coincident_step_checked(
+        "clean/wing-slab-side-moved-over-a-sliver.ug",
+        "0.001509731048476075",
+    );
+    assert_none(&r, DEFECTS, &out);
+    // Both pairs are still resolved.
+    for gone in ["f wing0.1.i4 ", "f wingslab1.5.dup.i3.c1 "] {
+        assert!(!out.contains(gone), "{gone}\n{out}");
+    }
+    assert!(out.contains("f slab1.3.i7.c3 "), "{out}");
+}
+
+/// A kept face does not take its removed twin's shape where that shape
+/// reaches over a face left
+/// (fixtures/clean/notch-piece-takes-a-twin-shape-past-the-notch.ug, the
+/// same seed): before, one overlapping pair after ugclean.
+#[test]
+fn a_kept_face_takes_no_twin_shape_that_overlaps_a_neighbour() {
+    let (out, r) = coincident_step_checked(
+        "clean/notch-piece-takes-a-twin-shape-past-the-notch.ug",
+        "0.000979052158071641",
+    );
+    assert_none(&r, DEFECTS, &out);
+    assert!(!out.contains("f s0w1p1.4.dup.i1 "), "{out}");
+    assert!(
+        out.contains(
+            "f slab0.4.i3.c2 (slab0.1.iv13 slab0.4.i3.cv3 slab0.4.i3.cv2 slab0.4.i3.cv1) slab;"
+        ),
+        "the notch piece keeps its own shape:\n{out}"
     );
 }
 
