@@ -3,17 +3,20 @@
 use glam::DVec3;
 use rstar::{AABB, RTree, RTreeObject};
 
+/// A box and its id. The envelope is stored, not made from the corners on
+/// each call: rstar asks for it at every node a query or the bulk load
+/// visits (a tenth of ugcut's time on the 100k building went to making
+/// it).
 #[derive(Clone, Copy, Debug)]
 struct Entry {
-    lo: [f64; 3],
-    hi: [f64; 3],
+    env: AABB<[f64; 3]>,
     id: u32,
 }
 
 impl RTreeObject for Entry {
     type Envelope = AABB<[f64; 3]>;
     fn envelope(&self) -> Self::Envelope {
-        AABB::from_corners(self.lo, self.hi)
+        self.env
     }
 }
 
@@ -28,8 +31,7 @@ impl BoxIndex {
         let entries: Vec<Entry> = boxes
             .into_iter()
             .map(|(lo, hi, id)| Entry {
-                lo: lo.to_array(),
-                hi: hi.to_array(),
+                env: AABB::from_corners(lo.to_array(), hi.to_array()),
                 id,
             })
             .collect();
