@@ -836,6 +836,29 @@ pub fn coplanar_pairs_with(
 /// tools that move vertices use it to see whether a move makes a pair
 /// overlap.
 pub fn coplanar_kind(ga: &FaceGeom, gb: &FaceGeom, eps: f64) -> Option<PairKind> {
+    // Both are measured in the plane of the one with the larger area, so
+    // that the answer does not depend on which is named first: a sliver's
+    // plane is ill-defined (a slab's end piece 1.2 epsilon wide, its
+    // normal 18° off the facade it lies on, overlapped the facade by 1,800
+    // epsilon² in the facade's plane and not at all in its own; property
+    // seed 71131 with curved things and stairs, once the pieces were
+    // written in the other order).
+    let area = |g: &FaceGeom| -> f64 {
+        g.contours_2d
+            .iter()
+            .map(|c| {
+                (0..c.len())
+                    .map(|i| c[i].perp_dot(c[(i + 1) % c.len()]))
+                    .sum::<f64>()
+            })
+            .sum::<f64>()
+            .abs()
+    };
+    let (ga, gb) = if area(gb) > area(ga) {
+        (gb, ga)
+    } else {
+        (ga, gb)
+    };
     // Only contours reaching the common box matter (one outside it cannot
     // surround any of it): a storey's floor with hundreds of holes against
     // a rug is the rug's neighbourhood.
@@ -1016,4 +1039,32 @@ pub fn surface_area(pts: &[Vec<DVec3>], nonplanar: bool) -> f64 {
         return geom::triangulate::triangles_area(&flat, &t);
     }
     geom::face_area(pts).abs()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A slab's end piece 1.2 epsilon wide lying on a facade face, the two
+    /// sharing three records (property seed 71131 after ugclean, before
+    /// the fix): they overlap, whichever is named first.
+    #[test]
+    fn a_coplanar_pair_is_judged_the_same_in_either_order() {
+        let eps = 1.4516520713073137e-5;
+        let p = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+        let iv382 = p(8.440535156989538, 5.426429645946041, 2.8119230403363593);
+        let iv409 = p(8.440534967234381, 5.426387073243252, 2.799999915256978);
+        let cv7 = p(8.440513991096031, 5.426405345428492, 2.8119232482884997);
+        let v1 = p(8.440535078822357, 5.426426204448327, 2.7999998344779895);
+        let v5 = p(8.440534970487347, 5.4263870722987875, 2.8119232533537843);
+        let facade = FaceGeom::new(vec![vec![iv382, v5, iv409, v1]]).unwrap();
+        let piece = FaceGeom::new(vec![vec![v1, iv382, cv7, iv409]]).unwrap();
+        let kind = |a: &FaceGeom, b: &FaceGeom| match geom::intersect::relate(a, b, eps) {
+            Relation::Coplanar => coplanar_kind(a, b, eps),
+            _ => None,
+        };
+        let (ab, ba) = (kind(&facade, &piece), kind(&piece, &facade));
+        assert!(matches!(ab, Some(PairKind::Overlap(_))), "{ab:?}");
+        assert_eq!(ab, ba);
+    }
 }
