@@ -866,31 +866,24 @@ pub fn coplanar_kind(ga: &FaceGeom, gb: &FaceGeom, eps: f64) -> Option<PairKind>
     let pad = DVec3::splat(4.0 * eps);
     let (wlo, whi) = (alo.max(blo) - pad, ahi.min(bhi) + pad);
     let near = |b: &(DVec3, DVec3)| b.0.cmple(whi).all() && b.1.cmpge(wlo).all();
-    let mut dropped = false;
-    let a2: Vec<Vec<DVec2>> = ga
-        .contours_2d
-        .iter()
-        .zip(&ga.contour_boxes)
-        .filter(|(_, b)| {
-            near(b) || {
-                dropped = true;
-                false
-            }
-        })
-        .map(|(c, _)| c.clone())
-        .collect();
-    let b2: Vec<Vec<DVec2>> = gb
-        .contours
-        .iter()
-        .zip(&gb.contour_boxes)
-        .filter(|(_, b)| {
-            near(b) || {
-                dropped = true;
-                false
-            }
-        })
-        .map(|(c, _)| c.iter().map(|&p| ga.frame.to_2d(p)).collect())
-        .collect();
+    // The contours of `g` that reach the common box, in `ga`'s frame.
+    let reaching = |g: &FaceGeom| -> Vec<Vec<DVec2>> {
+        g.contours
+            .iter()
+            .zip(&g.contour_boxes)
+            .enumerate()
+            .filter(|(_, (_, b))| near(b))
+            .map(|(k, (c, _))| {
+                if std::ptr::eq(g, ga) {
+                    g.contours_2d[k].clone()
+                } else {
+                    c.iter().map(|&p| ga.frame.to_2d(p)).collect()
+                }
+            })
+            .collect()
+    };
+    let (a2, b2) = (reaching(ga), reaching(gb));
+    let dropped = a2.len() < ga.contours.len() || b2.len() < gb.contours.len();
     // Snap rounding at epsilon drops every sliver narrower than epsilon:
     // what is left is a real overlap, however small.
     let (cov, clipped) = coverage_near(&a2, &b2, eps);
