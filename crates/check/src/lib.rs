@@ -846,11 +846,7 @@ pub fn coplanar_kind(ga: &FaceGeom, gb: &FaceGeom, eps: f64) -> Option<PairKind>
     let area = |g: &FaceGeom| -> f64 {
         g.contours_2d
             .iter()
-            .map(|c| {
-                (0..c.len())
-                    .map(|i| c[i].perp_dot(c[(i + 1) % c.len()]))
-                    .sum::<f64>()
-            })
+            .map(|c| geom::signed_area_2d(c))
             .sum::<f64>()
             .abs()
     };
@@ -871,15 +867,8 @@ pub fn coplanar_kind(ga: &FaceGeom, gb: &FaceGeom, eps: f64) -> Option<PairKind>
         g.contours
             .iter()
             .zip(&g.contour_boxes)
-            .enumerate()
-            .filter(|(_, (_, b))| near(b))
-            .map(|(k, (c, _))| {
-                if std::ptr::eq(g, ga) {
-                    g.contours_2d[k].clone()
-                } else {
-                    c.iter().map(|&p| ga.frame.to_2d(p)).collect()
-                }
-            })
+            .filter(|(_, b)| near(b))
+            .map(|(c, _)| c.iter().map(|&p| ga.frame.to_2d(p)).collect())
             .collect()
     };
     let (a2, b2) = (reaching(ga), reaching(gb));

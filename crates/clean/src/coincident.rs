@@ -482,7 +482,7 @@ fn reshape_meets_more(
     shape: &[Vec<VertexId>],
     eps: f64,
 ) -> bool {
-    use geom::intersect::{FaceGeom, Relation, relate};
+    use geom::intersect::FaceGeom;
     let geom_of = |cs: &[Vec<VertexId>]| {
         FaceGeom::new(
             cs.iter()
@@ -494,16 +494,13 @@ fn reshape_meets_more(
     else {
         return false;
     };
-    // 2 where they cross, 1 where they overlap or coincide, 0 otherwise.
-    let kind = |a: &FaceGeom, b: &FaceGeom| -> u8 {
-        match relate(a, b, eps) {
-            Relation::Intersect => 2,
-            Relation::Coplanar => u8::from(matches!(
-                check::coplanar_kind(a, b, eps),
-                Some(PairKind::Overlap(_) | PairKind::Coincident)
-            )),
-            Relation::Disjoint | Relation::Touch => 0,
-        }
+    let kind = |a: &FaceGeom, b: &FaceGeom| {
+        meeting(
+            a,
+            b,
+            eps,
+            Some(|k| matches!(k, PairKind::Overlap(_) | PairKind::Coincident)),
+        )
     };
     let (lo, hi) = after.bounds();
     let pad = DVec3::splat(eps);
@@ -520,6 +517,26 @@ fn reshape_meets_more(
         }
     }
     false
+}
+
+/// How two faces meet, as ugcheck judges: 2 where they cross, 1 where
+/// they are coplanar and `shared` (if given) takes the kind of what they
+/// share, 0 otherwise. The checks of a move or reshape compare it before
+/// and after.
+fn meeting(
+    a: &geom::intersect::FaceGeom,
+    b: &geom::intersect::FaceGeom,
+    eps: f64,
+    shared: Option<fn(PairKind) -> bool>,
+) -> u8 {
+    use geom::intersect::{Relation, relate};
+    match relate(a, b, eps) {
+        Relation::Intersect => 2,
+        Relation::Coplanar => u8::from(
+            shared.is_some_and(|counts| check::coplanar_kind(a, b, eps).is_some_and(counts)),
+        ),
+        Relation::Disjoint | Relation::Touch => 0,
+    }
 }
 
 /// The contours of removed face `gone` with records mapped by `to`, if
@@ -759,18 +776,9 @@ fn snap_onto_removed(
                   a: &geom::intersect::FaceGeom,
                   b: &geom::intersect::FaceGeom|
      -> u8 {
-        use geom::intersect::{Relation, relate};
-        match relate(a, b, eps) {
-            Relation::Intersect => 2,
-            Relation::Coplanar => u8::from(
-                (strict || (!kept[f as usize] && !kept[g as usize]))
-                    && matches!(
-                        check::coplanar_kind(a, b, eps),
-                        Some(check::PairKind::Overlap(_))
-                    ),
-            ),
-            Relation::Disjoint | Relation::Touch => 0,
-        }
+        let counted = strict || (!kept[f as usize] && !kept[g as usize]);
+        let overlap: fn(PairKind) -> bool = |k| matches!(k, PairKind::Overlap(_));
+        meeting(a, b, eps, counted.then_some(overlap))
     };
     let index = std::cell::OnceCell::new();
     // Whether moving the vertices of `moved` makes a face that names one
