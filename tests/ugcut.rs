@@ -604,6 +604,60 @@ fn a_thin_strip_is_divided_on_neither_side() {
     );
 }
 
+/// A slab's end in two strips one above the other, 5.2 and 2.6 epsilon
+/// wide (fixtures/cut/slab-end-in-two-strips.ug, property seed 181 at 100
+/// times epsilon): the upper strip's vertices put feet on the edge between
+/// them, and the lower strip, not divided along its other side, was fanned
+/// from one corner into a triangle 0.94 epsilon wide (a T-vertex and a
+/// degenerate patch at every length). Now a foot is carried across every
+/// thin strip its edge is a side of, and the lower strip is cut into quads.
+#[test]
+fn a_foot_is_carried_across_a_thin_strip() {
+    cuts_cleanly(
+        "cut/slab-end-in-two-strips.ug",
+        "0.0016508890435499946",
+        &["0.7", "0.3", "0.1", "2"],
+        1e-9,
+    );
+}
+
+/// A pipe's face with a spike 1.14 epsilon wide beside a vault piece
+/// (fixtures/cut/foot-beside-a-face-with-both-ends.ug, property seed 80023 on 3 ×
+/// 2 rooms with the wing, the roof and curved things): the pipe's long
+/// edge lies in the vault's plane, and the vault walks round from one end
+/// of it through a third vertex 1.14 epsilon off it to the other. That
+/// vertex's foot on the edge lay within epsilon of the vault's edge from
+/// it, and so of the vault's patch edges from it (2 T-vertices at every
+/// length). A division point within epsilon of a face that has both ends
+/// of its edge but not the edge is left out now.
+#[test]
+fn no_division_point_beside_a_face_with_both_ends_of_its_edge() {
+    let eps = "2.023810080700378e-5";
+    let input = std::fs::read(fixture("cut/foot-beside-a-face-with-both-ends.ug")).unwrap();
+    let before = check_eps(&input, eps);
+    assert_eq!(count(&before, "inconsistent"), 1);
+    let want = areas(&before);
+    for len in ["0.4", "0.7", "2", "0.2"] {
+        let out = run_ok("ugcut", &["-e", eps, "-l", len], Some(&input));
+        let r = check_eps(out.as_bytes(), eps);
+        for key in [
+            "nonpatch",
+            "tvertices",
+            "degenerate",
+            "overlapping",
+            "intersecting",
+        ] {
+            assert_eq!(count(&r, key), 0, "-l {len}: {key}: {}", r[key]);
+        }
+        assert_eq!(count(&r, "inconsistent"), 1, "-l {len}");
+        // (2.8e-8 measured: the vault piece is planar only within 0.65
+        // epsilon, and its patches lie on its vertices.)
+        for (a, b) in areas(&r).iter().zip(&want) {
+            assert!((a - b).abs() <= 1e-7 * b, "-l {len}: {a} vs {b}");
+        }
+    }
+}
+
 /// A pyramid's apex resting on a ceiling, 0.3 epsilon into it
 /// (fixtures/cut/cone-apex-on-a-ceiling.ug; property seed 9033, a globe's
 /// pole on a ceiling): a touch, nothing for ugisect to cut, and at -l 1

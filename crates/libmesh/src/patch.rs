@@ -568,6 +568,7 @@ fn feet_and_thin(m: &Model, eps: f64, planes: &FacePlanes) -> (Feet, Thin) {
         v.sort_unstable();
         v.dedup();
     }
+    carry_across_strips(m, eps, &thin, &mut out);
     if out.is_empty() {
         return (out, thin);
     }
@@ -617,6 +618,56 @@ fn feet_and_thin(m: &Model, eps: f64, planes: &FacePlanes) -> (Feet, Thin) {
     }
     out.retain(|_, ts| !ts.is_empty());
     (out, thin)
+}
+
+/// Carries each foot across the thin strips its edge is a side of: its
+/// foot on each thin partner (more than `eps` and at most [`THIN`]·`eps`
+/// away, more than 2·`eps` from the partner's ends, none there yet within
+/// 2·`eps`) is a foot of the partner too, and so on, strip by strip (at
+/// most 8 strips on). A foot divides its edge for every face that has it,
+/// so the strip on its other side got a division point on one side only,
+/// and was cut into needles: property seed 181 at 100 times epsilon, a
+/// slab's end in two strips 5.2 and 2.6 epsilon wide, one above the
+/// other; the upper one's vertices put feet on the edge between them, and
+/// the lower one, not divided along its other side, was fanned from one
+/// corner into a triangle 0.94 epsilon wide (a T-vertex and a degenerate
+/// patch). With the feet carried across, it is cut into quads.
+fn carry_across_strips(m: &Model, eps: f64, thin: &Thin, feet: &mut Feet) {
+    let reach = THIN * eps;
+    let mut keys: Vec<(VertexId, VertexId)> = feet.keys().copied().collect();
+    keys.sort_unstable();
+    let mut todo: Vec<((VertexId, VertexId), f64)> = keys
+        .iter()
+        .flat_map(|k| feet[k].iter().map(move |&t| (*k, t)))
+        .collect();
+    for _ in 0..8 {
+        if todo.is_empty() {
+            break;
+        }
+        let mut next = Vec::new();
+        for (e, t) in todo {
+            let Some(partners) = thin.get(&e) else {
+                continue;
+            };
+            let (a, b) = (m.pos(e.0), m.pos(e.1));
+            let x = a + (b - a) * t;
+            for &g in partners {
+                let (p, q) = (m.pos(g.0), m.pos(g.1));
+                let (d, s) = geom::point_segment_distance(x, p, q);
+                let l = (q - p).length();
+                if d <= eps || d > reach || s * l <= 2.0 * eps || (1.0 - s) * l <= 2.0 * eps {
+                    continue;
+                }
+                let on = feet.entry(g).or_default();
+                if on.iter().any(|&u| ((u - s) * l).abs() <= 2.0 * eps) {
+                    continue;
+                }
+                on.push(s);
+                next.push((g, s));
+            }
+        }
+        todo = next;
+    }
 }
 
 /// A set of names, kept as 64-bit SipHash values (with fixed keys, so the
@@ -784,18 +835,37 @@ impl Ctx<'_> {
                 !(0..2).any(|s| {
                     self.planes.around_range(ends[s]).any(|i| {
                         let k = self.planes.at[i];
-                        // Not a face with the edge (it has both ends).
-                        if self.planes.around(ends[1 - s]).binary_search(&k).is_ok() {
+                        // Not a face with the edge (it has both ends and
+                        // walks from one to the other). One with both ends
+                        // but not the edge is asked, and a point within
+                        // epsilon of its boundary is left out too: a vault
+                        // piece walking round a pipe from one end of the
+                        // pipe's edge through a third vertex to the other
+                        // had the foot of that vertex on the edge 1.14
+                        // epsilon from it, within epsilon of the vault's
+                        // edge from it and so of the vault's patch edges
+                        // from it, a T-vertex (property seed 80023 on 3 ×
+                        // 2 rooms with the wing, the roof and curved
+                        // things).
+                        let both = self.planes.around(ends[1 - s]).binary_search(&k).is_ok();
+                        if both && has_edge(&m.faces[self.planes.faces[k as usize].idx()], key) {
                             return false;
                         }
-                        // Nor one the edge lies in.
+                        // Nor one the edge lies in, unless the face has
+                        // both its ends (the pipe's edge above lay in the
+                        // vault's plane, 1.14 epsilon from the vault's
+                        // third vertex along it).
                         let Some((n, c)) = self.planes.plane_of(m, k) else {
                             return false;
                         };
-                        if (p - c).dot(n).abs() <= eps && (q - c).dot(n).abs() <= eps {
+                        if !both && (p - c).dot(n).abs() <= eps && (q - c).dot(n).abs() <= eps {
                             return false;
                         }
-                        self.planes.rests_in(m, x, eps, k)
+                        match self.planes.locate(m, x, eps, k) {
+                            Some(geom::Location::Inside) => true,
+                            Some(geom::Location::Boundary) => both,
+                            _ => false,
+                        }
                     })
                 })
             });
@@ -823,6 +893,17 @@ impl Ctx<'_> {
         }
         out
     }
+}
+
+/// Whether one of `face`'s contours walks from one end of `edge` to the
+/// other.
+fn has_edge(face: &ug::Face, edge: (VertexId, VertexId)) -> bool {
+    face.contours.iter().any(|c| {
+        (0..c.len()).any(|i| {
+            let (a, b) = (c[i], c[(i + 1) % c.len()]);
+            (a, b) == edge || (b, a) == edge
+        })
+    })
 }
 
 /// The whole number of segments (at least 1) nearest to `length / len`.
@@ -1058,12 +1139,16 @@ impl FacePlanes {
     /// `eps` of its plane and inside its contours by more than `eps`, in
     /// its mesh frame.
     fn rests_in(&mut self, m: &Model, p: DVec3, eps: f64, k: u32) -> bool {
+        self.locate(m, p, eps, k) == Some(geom::Location::Inside)
+    }
+
+    /// Where `p` lies in face `k`'s contours (in its mesh frame), if
+    /// within `eps` of its plane.
+    fn locate(&mut self, m: &Model, p: DVec3, eps: f64, k: u32) -> Option<geom::Location> {
         // The plane first (cheap), then the contours in the face's frame.
-        let Some((n, centre)) = self.plane_of(m, k) else {
-            return false;
-        };
+        let (n, centre) = self.plane_of(m, k)?;
         if (p - centre).dot(n).abs() > eps {
-            return false;
+            return None;
         }
         let face = &m.faces[self.faces[k as usize].idx()];
         let Some((frame, c2)) = self
@@ -1080,9 +1165,9 @@ impl FacePlanes {
             })
             .as_ref()
         else {
-            return false;
+            return None;
         };
-        geom::intersect::locate_eps(frame.to_2d(p), c2, eps) == geom::Location::Inside
+        Some(geom::intersect::locate_eps(frame.to_2d(p), c2, eps))
     }
 }
 
