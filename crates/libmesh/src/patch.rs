@@ -1151,7 +1151,7 @@ impl FacePlanes {
             return None;
         }
         let face = &m.faces[self.faces[k as usize].idx()];
-        let Some((frame, c2)) = self
+        let (frame, c2) = self
             .flat
             .entry(k)
             .or_insert_with(|| {
@@ -1163,10 +1163,7 @@ impl FacePlanes {
                     .collect();
                 Some((frame, c2))
             })
-            .as_ref()
-        else {
-            return None;
-        };
+            .as_ref()?;
         Some(geom::intersect::locate_eps(frame.to_2d(p), c2, eps))
     }
 }
