@@ -279,3 +279,68 @@ fn position_checker_rejects_wrong_places() {
     assert!(check_position(src, 1, 40, "bad number '0'").is_err());
     assert!(Path::new(&root()).join("fixtures/bad/inc").is_dir());
 }
+
+/// A coordinate beyond `ug::MAX_COORDINATE` stops ugrad before it starts
+/// (at 1e78 it emitted NaN and never converged: a hang), and a model too
+/// small to measure is refused by name, exit status 2, nothing on stdout.
+#[test]
+fn models_beyond_double_precision_are_refused() {
+    let run = |tool: &str, src: &str| -> Output {
+        use std::io::Write;
+        let mut child = Command::new(bin(tool))
+            .arg("-q")
+            .current_dir(root())
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start tool");
+        child
+            .stdin
+            .take()
+            .expect("stdin")
+            .write_all(src.as_bytes())
+            .expect("write stdin");
+        child.wait_with_output().expect("wait")
+    };
+    let model = |s: f64| {
+        format!(
+            "defmat lamp; emission_rgb 10 10 10; end;\nc_rgb grey 0.6 0.6 0.6;\n\
+             v a 0 0 0; v b {x:e} 0 0; v c {x:e} {x:e} 0; v d 0 {x:e} 0;\n\
+             f floor (a b c d) grey;\n\
+             v e {l:e} {l:e} {h:e}; v f {l:e} {m:e} {h:e}; v g {m:e} {m:e} {h:e}; v h {m:e} {l:e} {h:e};\n\
+             f lamp (e f g h) lamp;\n",
+            x = 4.0 * s,
+            l = 1.5 * s,
+            m = 2.5 * s,
+            h = 3.0 * s
+        )
+    };
+    for tool in ["ugrad", "ugcheck", "ugvlmerge", "ugcut"] {
+        let out = run(tool, &model(1e78));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{tool}: {err}");
+        assert!(out.stdout.is_empty(), "{tool}");
+        assert!(
+            err.starts_with("<stdin>:3:16: error: x coordinate '4e78' is beyond"),
+            "{tool}: {err}"
+        );
+        let out = run(tool, &model(1e-40));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{tool}: {err}");
+        assert!(out.stdout.is_empty(), "{tool}");
+        assert!(
+            err.contains("<stdin>: the model's vertices span only"),
+            "{tool}: {err}"
+        );
+    }
+    // Within the range both ends light.
+    for s in [1e-25, 1e35] {
+        let out = run("ugrad", &model(s));
+        assert!(
+            out.status.success(),
+            "{s}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}

@@ -19,5 +19,7 @@ pub mod writer;
 pub use error::{Diagnostic, Level, Pos};
 pub use flatten::{FlattenLimits, transform_matrix};
 pub use model::*;
-pub use parser::{IncludeMode, ParseOptions, Parsed, parse, parse_file, parse_with};
+pub use parser::{
+    IncludeMode, MAX_COORDINATE, MIN_EXTENT, ParseOptions, Parsed, parse, parse_file, parse_with,
+};
 pub use writer::{fmt_f64, push_f64, write, write_string};

@@ -108,6 +108,7 @@ pub fn parse_with(
         .and_then(|()| p.finish_scope(scope, &items))
         .and_then(|()| p.resolve_materials())
         .map_err(|e| *e)?;
+    check_extent(&p.model, file)?;
     items.shrink_to_fit();
     p.model.vertices.shrink_to_fit();
     p.model.faces.shrink_to_fit();
@@ -116,6 +117,36 @@ pub fn parse_with(
         model: p.model,
         warnings: p.warnings,
     })
+}
+
+/// The largest coordinate a vertex may have. The geometric tests multiply
+/// up to six lengths (a point against a plane through three others, the
+/// polygon-to-point form factor's squared areas): beyond about 1e50 they
+/// overflow, a face is found to have no area and is dropped, and `ugrad`
+/// emitted NaN and never converged. 1e40 leaves room.
+pub const MAX_COORDINATE: f64 = 1e40;
+
+/// The smallest extent (bounding-box diagonal) a model with any extent may
+/// have: below about 1e-40 the same products underflow, and faces were
+/// dropped or could not be triangulated. 1e-30 leaves room.
+pub const MIN_EXTENT: f64 = 1e-30;
+
+/// A model whose vertices span less than [`MIN_EXTENT`] (but more than a
+/// point) is refused: the tools cannot measure it.
+fn check_extent(m: &Model, file: &str) -> Result<(), Diagnostic> {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    for v in &m.vertices {
+        lo = lo.min(v.pos);
+        hi = hi.max(v.pos);
+    }
+    let d = (hi - lo).length();
+    if d > 0.0 && d < MIN_EXTENT {
+        return Err(Diagnostic::plain(format!(
+            "{file}: the model's vertices span only {d:e}, less than {MIN_EXTENT:e}: too small to measure in double precision (scale the model up, for example with a def and an instance scaled by 1e6)"
+        )));
+    }
+    Ok(())
 }
 
 /// Reads and parses a file; its includes resolve relative to its directory.
@@ -325,6 +356,25 @@ impl<'a> Toks<'a> {
     }
     fn number(&mut self, what: &str) -> PResult<f64> {
         self.number_of(|| what.to_string())
+    }
+    /// A vertex coordinate: a number no larger than [`MAX_COORDINATE`].
+    fn coordinate(&mut self, what: &str) -> PResult<f64> {
+        let t = self.next()?;
+        if t.kind == Kind::Word
+            && let Some(v) = number_value(t.text)
+        {
+            if v.abs() > MAX_COORDINATE {
+                return Err(self.err(
+                    &t,
+                    format!(
+                        "{what} {} is beyond ±{MAX_COORDINATE:e}: too large to compute with in double precision (scale the model down)",
+                        quote(t.text)
+                    ),
+                ));
+            }
+            return Ok(v);
+        }
+        Err(self.not_a_number(&t, what))
     }
     /// A number; `what` describes it for an error message (built only on error).
     #[inline]
@@ -886,9 +936,9 @@ impl Parser<'_> {
         items: &mut Vec<Item>,
     ) -> PResult<()> {
         let name = t.name("vertex name")?;
-        let x = t.number("x coordinate")?;
-        let y = t.number("y coordinate")?;
-        let z = t.number("z coordinate")?;
+        let x = t.coordinate("x coordinate")?;
+        let y = t.coordinate("y coordinate")?;
+        let z = t.coordinate("z coordinate")?;
         let color = self.trailing_color(t, "vertex")?;
         self.commit_vertex(t, scope, items, &name, DVec3::new(x, y, z), color)
     }
@@ -959,8 +1009,8 @@ impl Parser<'_> {
                 .word_after_blanks(true)
                 .and_then(|w| number_value(w.text))
             {
-                Some(v) => *c = v,
-                None => return Ok(false),
+                Some(v) if v.abs() <= MAX_COORDINATE => *c = v,
+                _ => return Ok(false),
             }
         }
         let Some((color, semi)) = cur.trailing_color() else {
