@@ -37,6 +37,7 @@ fn main() -> std::process::ExitCode {
             let opts = cli::ug::ParseOptions {
                 strict: c.strict,
                 includes: cli::ug::IncludeMode::Keep,
+                limits: true,
             };
             let parsed = cli::ug::parse_with(&input.bytes, &input.name, Some(&input.dir), &opts)?;
             if !c.quiet {

@@ -100,6 +100,7 @@ impl Common {
         let input = self.read_input()?;
         let opts = ug::ParseOptions {
             strict: self.strict,
+            limits: true,
             ..Default::default()
         };
         let parsed = ug::parse_with(&input.bytes, &input.name, Some(&input.dir), &opts)?;
@@ -121,7 +122,30 @@ impl Common {
                 m.defs.len()
             );
         }
-        Ok(m.flatten()?)
+        let flat = m.flatten()?;
+        // Instances may scale vertices beyond the limit the parser keeps.
+        if let Some(v) = flat
+            .vertices
+            .iter()
+            .find(|v| v.pos.abs().max_element() > ug::MAX_COORDINATE)
+        {
+            return Err(Failure::input(format!(
+                "{}: error: flattening moves vertex '{}' beyond ±{:e}: too large to compute with in double precision (scale the model down)",
+                self.input_name(),
+                v.name,
+                ug::MAX_COORDINATE
+            )));
+        }
+        Ok(flat)
+    }
+
+    /// The input's name in messages.
+    fn input_name(&self) -> String {
+        match self.input.as_deref() {
+            None => "<stdin>".to_string(),
+            Some(p) if p == Path::new("-") => "<stdin>".to_string(),
+            Some(p) => p.display().to_string(),
+        }
     }
 
     /// Writes the finished output (see [`write_output`]).

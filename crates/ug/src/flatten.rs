@@ -406,10 +406,9 @@ impl Flattener<'_> {
                         Self::unique(&mut self.vnames, name_of(prefix, &sv.name))
                     };
                     let pos = m.transform_point3(sv.pos);
-                    if !pos.is_finite() || pos.abs().max_element() > crate::parser::MAX_COORDINATE {
+                    if !pos.is_finite() {
                         return Err(Diagnostic::plain(format!(
-                            "flattening moves vertex '{name}' beyond ±{:e} (the instance transforms scale it too far)",
-                            crate::parser::MAX_COORDINATE
+                            "flattening moves vertex '{name}' to a non-finite position (the instance transforms overflow)"
                         )));
                     }
                     let id = VertexId(self.out.vertices.len() as u32);

@@ -39,6 +39,11 @@ pub struct ParseOptions {
     /// Unknown keywords are errors instead of warnings.
     pub strict: bool,
     pub includes: IncludeMode,
+    /// The geometry tools' limits: a vertex coordinate beyond
+    /// [`MAX_COORDINATE`] is an error at its word, and a model whose vertices
+    /// span less than [`MIN_EXTENT`] (but more than a point) one naming the
+    /// file. Off, any finite number is a coordinate (the format itself).
+    pub limits: bool,
 }
 
 /// A parsed model and the warnings met on the way.
@@ -108,7 +113,9 @@ pub fn parse_with(
         .and_then(|()| p.finish_scope(scope, &items))
         .and_then(|()| p.resolve_materials())
         .map_err(|e| *e)?;
-    check_extent(&p.model, file)?;
+    if opts.limits {
+        check_extent(&p.model, file)?;
+    }
     items.shrink_to_fit();
     p.model.vertices.shrink_to_fit();
     p.model.faces.shrink_to_fit();
@@ -119,7 +126,8 @@ pub fn parse_with(
     })
 }
 
-/// The largest coordinate a vertex may have. The geometric tests multiply
+/// The largest coordinate a vertex may have for the geometry tools
+/// ([`ParseOptions::limits`]). The geometric tests multiply
 /// up to six lengths (a point against a plane through three others, the
 /// polygon-to-point form factor's squared areas): beyond about 1e50 they
 /// overflow, a face is found to have no area and is dropped, and `ugrad`
@@ -127,7 +135,7 @@ pub fn parse_with(
 pub const MAX_COORDINATE: f64 = 1e40;
 
 /// The smallest extent (bounding-box diagonal) a model with any extent may
-/// have: below about 1e-40 the same products underflow, and faces were
+/// have for the geometry tools ([`ParseOptions::limits`]): below about 1e-40 the same products underflow, and faces were
 /// dropped or could not be triangulated. 1e-30 leaves room.
 pub const MIN_EXTENT: f64 = 1e-30;
 
@@ -357,17 +365,17 @@ impl<'a> Toks<'a> {
     fn number(&mut self, what: &str) -> PResult<f64> {
         self.number_of(|| what.to_string())
     }
-    /// A vertex coordinate: a number no larger than [`MAX_COORDINATE`].
-    fn coordinate(&mut self, what: &str) -> PResult<f64> {
+    /// A vertex coordinate: a number no larger than `limit` in magnitude.
+    fn coordinate(&mut self, what: &str, limit: f64) -> PResult<f64> {
         let t = self.next()?;
         if t.kind == Kind::Word
             && let Some(v) = number_value(t.text)
         {
-            if v.abs() > MAX_COORDINATE {
+            if v.abs() > limit {
                 return Err(self.err(
                     &t,
                     format!(
-                        "{what} {} is beyond ±{MAX_COORDINATE:e}: too large to compute with in double precision (scale the model down)",
+                        "{what} {} is beyond ±{limit:e}: too large to compute with in double precision (scale the model down)",
                         quote(t.text)
                     ),
                 ));
@@ -936,9 +944,14 @@ impl Parser<'_> {
         items: &mut Vec<Item>,
     ) -> PResult<()> {
         let name = t.name("vertex name")?;
-        let x = t.coordinate("x coordinate")?;
-        let y = t.coordinate("y coordinate")?;
-        let z = t.coordinate("z coordinate")?;
+        let limit = if self.opts.limits {
+            MAX_COORDINATE
+        } else {
+            f64::INFINITY
+        };
+        let x = t.coordinate("x coordinate", limit)?;
+        let y = t.coordinate("y coordinate", limit)?;
+        let z = t.coordinate("z coordinate", limit)?;
         let color = self.trailing_color(t, "vertex")?;
         self.commit_vertex(t, scope, items, &name, DVec3::new(x, y, z), color)
     }
@@ -1009,7 +1022,7 @@ impl Parser<'_> {
                 .word_after_blanks(true)
                 .and_then(|w| number_value(w.text))
             {
-                Some(v) if v.abs() <= MAX_COORDINATE => *c = v,
+                Some(v) if !self.opts.limits || v.abs() <= MAX_COORDINATE => *c = v,
                 _ => return Ok(false),
             }
         }

@@ -516,16 +516,11 @@ fn transforms_that_overflow_are_an_error() {
     let e = parse("def d; v p 1 1 1; end; i (d -sa 1e200 -sa 1e200);")
         .flatten()
         .unwrap_err();
-    assert!(e.message.contains("beyond"), "{e}");
+    assert!(e.message.contains("non-finite"), "{e}");
     let e = parse("def d; v p 1 1 1; end; i (d -M4 1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1e-320);")
         .flatten()
         .unwrap_err();
-    assert!(e.message.contains("beyond"), "{e}");
-    // Finite, but beyond ug::MAX_COORDINATE.
-    let e = parse("def d; v p 1 1 1; end; i (d -sa 1e30 -sa 1e30);")
-        .flatten()
-        .unwrap_err();
-    assert!(e.message.contains("beyond"), "{e}");
+    assert!(e.message.contains("non-finite"), "{e}");
 }
 
 #[test]

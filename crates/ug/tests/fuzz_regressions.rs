@@ -9,6 +9,7 @@ fn opts() -> ParseOptions {
     ParseOptions {
         strict: false,
         includes: IncludeMode::Keep,
+        limits: false,
     }
 }
 

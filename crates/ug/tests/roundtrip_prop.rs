@@ -464,6 +464,7 @@ fn reparse(text: &str, keep_includes: bool) -> Result<Model, Diagnostic> {
         } else {
             IncludeMode::Resolve
         },
+        limits: false,
     };
     ug::parse_with(text.as_bytes(), "written.ug", None, &opts).map(|p| p.model)
 }

@@ -123,7 +123,12 @@ pub fn tokenize(src: &[u8]) -> Vec<Vec<Tok<'_>>> {
     let is_blank = |c: u8| matches!(c, b' ' | b'\t' | b'\r' | 0x0b | 0x0c);
     while i < src.len() {
         let c = src[i];
-        if c == b'\n' {
+        // A carriage return not followed by a line feed ends a line too
+        // (classic Mac OS line endings: read as blanks, a whole file was
+        // one `v` statement whose extra words were ignored, and the model
+        // came out empty).
+        let lone_cr = c == b'\r' && src.get(i + 1) != Some(&b'\n');
+        if c == b'\n' || lone_cr {
             // A backslash right before the newline (blanks allowed) continues the line.
             let continued = !in_comment
                 && cur
@@ -163,7 +168,10 @@ pub fn tokenize(src: &[u8]) -> Vec<Vec<Tok<'_>>> {
         }
         let mut text = &src[start..i];
         // `word\` followed by the newline: the backslash is a continuation.
-        if text.len() > 1 && text.ends_with(b"\\") && src.get(i).is_none_or(|&c| c == b'\n') {
+        if text.len() > 1
+            && text.ends_with(b"\\")
+            && src.get(i).is_none_or(|&c| c == b'\n' || c == b'\r')
+        {
             text = &text[..text.len() - 1];
             cur.push(Tok {
                 text,
@@ -488,6 +496,11 @@ pub fn convert_with(
                     None
                 };
                 colours.push(rgb);
+                // Whatever else follows (a weight, a colour) must be
+                // numbers: a word that is not is an error, not ignored.
+                for t in toks.iter().skip(4) {
+                    number(file, t, "a number (a weight or colour component)")?;
+                }
             }
             b"f" | b"fo" | b"l" => {
                 let mut verts = Vec::with_capacity(toks.len() - 1);
@@ -926,6 +939,33 @@ mod tests {
             c.warnings
                 .iter()
                 .any(|w| w.contains("t.obj:7:1: warning: face with a repeated vertex dropped"))
+        );
+    }
+
+    /// Classic Mac OS line endings (a lone CR) end lines as LF and CRLF
+    /// do: read as blanks, the whole file was one `v` statement whose
+    /// other words were ignored, an empty model.
+    #[test]
+    fn lone_carriage_returns_end_lines() {
+        let c = conv("v 0 0 0\rv 1 0 0\r\nv 0 1 0\rf 1 2 3\r").unwrap();
+        assert_eq!(c.model.vertices.len(), 3);
+        assert_eq!(c.model.faces.len(), 1);
+        let e = conv("v 0 0 0\rv 1 0 x\r").unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "t.obj:2:7: error: bad number 'x' (expected z coordinate)"
+        );
+    }
+
+    /// A word after a vertex's coordinates that is not a number is an
+    /// error, not ignored (weights and colours are numbers).
+    #[test]
+    fn words_after_coordinates_are_numbers() {
+        assert!(conv("v 0 0 0 1\nv 1 0 0 0.5 0.5 0.5\n").is_ok());
+        let e = conv("v 0 0 0 garbage\n").unwrap_err().to_string();
+        assert!(
+            e.starts_with("t.obj:1:9: error: bad number 'garbage'"),
+            "{e}"
         );
     }
 

@@ -125,6 +125,19 @@ impl Scalar {
         !matches!(self, Scalar::F32 | Scalar::F64)
     }
 
+    /// The values an integer type holds.
+    fn range(self) -> (i64, i64) {
+        match self {
+            Scalar::I8 => (i8::MIN.into(), i8::MAX.into()),
+            Scalar::U8 => (0, u8::MAX.into()),
+            Scalar::I16 => (i16::MIN.into(), i16::MAX.into()),
+            Scalar::U16 => (0, u16::MAX.into()),
+            Scalar::I32 => (i32::MIN.into(), i32::MAX.into()),
+            Scalar::U32 => (0, u32::MAX.into()),
+            Scalar::F32 | Scalar::F64 => (i64::MIN, i64::MAX),
+        }
+    }
+
     /// The value a colour of this type has at full intensity.
     fn full(self) -> f64 {
         match self {
@@ -577,7 +590,19 @@ impl Data for Ascii<'_> {
         };
         let v = if t.is_int() {
             match s.parse::<i64>() {
-                Ok(i) => Val::Int(i),
+                Ok(i) if (t.range().0..=t.range().1).contains(&i) => Val::Int(i),
+                Ok(_) => {
+                    let (lo, hi) = t.range();
+                    return Err(self.err(
+                        w.col,
+                        format!(
+                            "{} {} out of range {lo}..={hi} (property '{prop}' of element '{}')",
+                            t.name(),
+                            quote(w.text),
+                            el.name
+                        ),
+                    ));
+                }
                 Err(_) => {
                     return Err(self.err(
                         w.col,

@@ -402,3 +402,24 @@ proptest! {
         let _ = conv(&bytes);
     }
 }
+
+/// An ASCII integer beyond its type's range is an error at the word (a
+/// `uchar` of 300 was read as 300).
+#[test]
+fn ascii_integers_out_of_their_range_are_errors() {
+    let src = |x: &str| {
+        format!(
+            "ply\nformat ascii 1.0\nelement vertex 1\nproperty uchar x\nproperty uchar y\n\
+             property char z\nend_header\n{x}\n"
+        )
+    };
+    assert!(conv(src("255 0 -128").as_bytes()).is_ok());
+    assert_eq!(
+        err(src("300 0 0").as_bytes()),
+        "t.ply:8:1: error: uchar '300' out of range 0..=255 (property 'x' of element 'vertex')"
+    );
+    assert_eq!(
+        err(src("0 0 -129").as_bytes()),
+        "t.ply:8:5: error: char '-129' out of range -128..=127 (property 'z' of element 'vertex')"
+    );
+}
