@@ -59,6 +59,17 @@ fn cut(input: &[u8], len: &str) -> (String, [f64; 4]) {
     )
 }
 
+/// What ugcut's output must not have, orientation aside: faces that are
+/// not patches, T-vertices, degenerate patches, overlapping or
+/// intersecting pairs.
+const NOT_PATCHES: [&str; 5] = [
+    "nonpatch",
+    "tvertices",
+    "degenerate",
+    "overlapping",
+    "intersecting",
+];
+
 /// ugcheck's report `r` of ugcut's output at `-l len`: only patches, with
 /// no T-vertex, degenerate or overlapping one, consistently oriented.
 fn assert_only_sound_patches(r: &serde_json::Value, len: &str) {
@@ -224,13 +235,7 @@ fn collinear_boundary_vertices_and_thin_strips_keep_their_area() {
         let before = check(&src);
         let out = run_ok("ugcut", &["-l", "1"], Some(src.as_bytes()));
         let after = check(&out);
-        for key in [
-            "nonpatch",
-            "tvertices",
-            "degenerate",
-            "overlapping",
-            "intersecting",
-        ] {
+        for key in NOT_PATCHES {
             assert_eq!(count(&after, key), 0, "{name}: {key}");
         }
         let (a, b) = (
@@ -640,13 +645,7 @@ fn no_division_point_beside_a_face_with_both_ends_of_its_edge() {
     for len in ["0.4", "0.7", "2", "0.2"] {
         let out = run_ok("ugcut", &["-e", eps, "-l", len], Some(&input));
         let r = check_eps(out.as_bytes(), eps);
-        for key in [
-            "nonpatch",
-            "tvertices",
-            "degenerate",
-            "overlapping",
-            "intersecting",
-        ] {
+        for key in NOT_PATCHES {
             assert_eq!(count(&r, key), 0, "-l {len}: {key}: {}", r[key]);
         }
         assert_eq!(count(&r, "inconsistent"), 1, "-l {len}");
