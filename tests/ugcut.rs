@@ -836,3 +836,30 @@ fn faces_a_join_does_not_reach_are_replayed_unchanged() {
         assert_eq!(st.patches, st2.patches);
     }
 }
+
+/// A length that would make more patches than `--max-patches` is refused
+/// at once (exit 2, nothing on stdout): `-l 20` on a floor 400 km square
+/// is about 8e8 patches, which ran until killed.
+#[test]
+fn a_length_making_too_many_patches_is_refused() {
+    let floor = "c_rgb g 0.5 0.5 0.5;\n\
+                 v a 0 0 0; v b 4e5 0 0; v c 4e5 4e5 0; v d 0 4e5 0; f floor (a b c d) g;\n";
+    let out = run("ugcut", &["-l", "20"], Some(floor.as_bytes()));
+    assert_eq!(out.status.code(), Some(2));
+    assert!(out.stdout.is_empty());
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        err.contains("about 8.0e8 patches, more than --max-patches 50000000"),
+        "{err}"
+    );
+    // A length within the limit meshes, and the estimate bounds the
+    // patches made: a grid of 100 × 100 at -l 4000 (2e4 estimated).
+    let out = run(
+        "ugcut",
+        &["-l", "4000", "--max-patches", "20000", "-q"],
+        Some(floor.as_bytes()),
+    );
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(text.lines().filter(|l| l.starts_with("f ")).count(), 10_000);
+}

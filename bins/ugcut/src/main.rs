@@ -34,6 +34,11 @@ struct Args {
     /// Keep triangles (do not join pairs into quads).
     #[arg(long)]
     triangles: bool,
+    /// Refuse a length that would make more patches than this (estimated
+    /// from the faces' area): `-l 2` on a model in millimetres asks for
+    /// billions, and would run until killed.
+    #[arg(long, value_name = "N", default_value_t = 50_000_000)]
+    max_patches: u64,
 }
 
 fn parse_angle(s: &str) -> Result<f64, String> {
@@ -116,6 +121,26 @@ fn main() -> std::process::ExitCode {
         if len <= 10.0 * eps && !flat {
             return Err(cli::Failure::input(format!(
                 "error: -l {len} is not larger than 10 × epsilon ({eps:e})"
+            )));
+        }
+        // About two patches per square of the length (triangles are half
+        // a square; quads a whole one).
+        let area: f64 = model
+            .top_faces()
+            .map(|f| {
+                let pts: Vec<Vec<geom::DVec3>> = model.faces[f.idx()]
+                    .contours
+                    .iter()
+                    .map(|c| c.iter().map(|&v| model.pos(v)).collect())
+                    .collect();
+                geom::face_area(&pts).abs()
+            })
+            .sum();
+        let estimate = 2.0 * area / (len * len);
+        if estimate > args.max_patches as f64 {
+            return Err(cli::Failure::input(format!(
+                "error: -l {len} would cut the faces' area of {area:e} into about {estimate:.1e} patches, more than --max-patches {} (give a longer -l, or a percentage of the model's size: the default is 2%)",
+                args.max_patches
             )));
         }
         let opts = libmesh::patch::Options {
