@@ -609,23 +609,6 @@ fn a_thin_strip_is_divided_on_neither_side() {
     );
 }
 
-/// A slab's end in two strips one above the other, 5.2 and 2.6 epsilon
-/// wide (fixtures/cut/slab-end-in-two-strips.ug, property seed 181 at 100
-/// times epsilon): the upper strip's vertices put feet on the edge between
-/// them, and the lower strip, not divided along its other side, was fanned
-/// from one corner into a triangle 0.94 epsilon wide (a T-vertex and a
-/// degenerate patch at every length). Now a foot is carried across every
-/// thin strip its edge is a side of, and the lower strip is cut into quads.
-#[test]
-fn a_foot_is_carried_across_a_thin_strip() {
-    cuts_cleanly(
-        "cut/slab-end-in-two-strips.ug",
-        "0.0016508890435499946",
-        &["0.7", "0.3", "0.1", "2"],
-        1e-9,
-    );
-}
-
 /// A pipe's face with a spike 1.14 epsilon wide beside a vault piece
 /// (fixtures/cut/foot-beside-a-face-with-both-ends.ug, property seed 80023 on 3 ×
 /// 2 rooms with the wing, the roof and curved things): the pipe's long

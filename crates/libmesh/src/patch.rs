@@ -568,7 +568,6 @@ fn feet_and_thin(m: &Model, eps: f64, planes: &FacePlanes) -> (Feet, Thin) {
         v.sort_unstable();
         v.dedup();
     }
-    carry_across_strips(m, eps, &thin, &mut out);
     if out.is_empty() {
         return (out, thin);
     }
@@ -618,56 +617,6 @@ fn feet_and_thin(m: &Model, eps: f64, planes: &FacePlanes) -> (Feet, Thin) {
     }
     out.retain(|_, ts| !ts.is_empty());
     (out, thin)
-}
-
-/// Carries each foot across the thin strips its edge is a side of: its
-/// foot on each thin partner (more than `eps` and at most [`THIN`]·`eps`
-/// away, more than 2·`eps` from the partner's ends, none there yet within
-/// 2·`eps`) is a foot of the partner too, and so on, strip by strip (at
-/// most 8 strips on). A foot divides its edge for every face that has it,
-/// so the strip on its other side got a division point on one side only,
-/// and was cut into needles: property seed 181 at 100 times epsilon, a
-/// slab's end in two strips 5.2 and 2.6 epsilon wide, one above the
-/// other; the upper one's vertices put feet on the edge between them, and
-/// the lower one, not divided along its other side, was fanned from one
-/// corner into a triangle 0.94 epsilon wide (a T-vertex and a degenerate
-/// patch). With the feet carried across, it is cut into quads.
-fn carry_across_strips(m: &Model, eps: f64, thin: &Thin, feet: &mut Feet) {
-    let reach = THIN * eps;
-    let mut keys: Vec<(VertexId, VertexId)> = feet.keys().copied().collect();
-    keys.sort_unstable();
-    let mut todo: Vec<((VertexId, VertexId), f64)> = keys
-        .iter()
-        .flat_map(|k| feet[k].iter().map(move |&t| (*k, t)))
-        .collect();
-    for _ in 0..8 {
-        if todo.is_empty() {
-            break;
-        }
-        let mut next = Vec::new();
-        for (e, t) in todo {
-            let Some(partners) = thin.get(&e) else {
-                continue;
-            };
-            let (a, b) = (m.pos(e.0), m.pos(e.1));
-            let x = a + (b - a) * t;
-            for &g in partners {
-                let (p, q) = (m.pos(g.0), m.pos(g.1));
-                let (d, s) = geom::point_segment_distance(x, p, q);
-                let l = (q - p).length();
-                if d <= eps || d > reach || s * l <= 2.0 * eps || (1.0 - s) * l <= 2.0 * eps {
-                    continue;
-                }
-                let on = feet.entry(g).or_default();
-                if on.iter().any(|&u| ((u - s) * l).abs() <= 2.0 * eps) {
-                    continue;
-                }
-                on.push(s);
-                next.push((g, s));
-            }
-        }
-        todo = next;
-    }
 }
 
 /// A set of names, kept as 64-bit SipHash values (with fixed keys, so the
