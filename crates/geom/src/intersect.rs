@@ -321,14 +321,11 @@ fn relate_on_line(a: &FaceGeom, b: &FaceGeom, eps: f64) -> Relation {
     // evidence (`corner_fan`).
     let mut touch = false;
     for (k, &t) in ts.iter().enumerate() {
-        let mut tried = vec![(near[k], false)];
-        if let Some(&t2) = ts.get(k + 1) {
-            tried.push((
-                stretch_middle(steep, &near, k, p0 + dir * ((t + t2) / 2.0)),
-                true,
-            ));
-        }
-        for (s, middle) in tried {
+        // The boundary point, then the middle of the stretch after it.
+        let middle = ts
+            .get(k + 1)
+            .map(|&t2| stretch_middle(steep, &near, k, p0 + dir * ((t + t2) / 2.0)));
+        for (s, middle) in std::iter::once((near[k], false)).chain(middle.map(|m| (m, true))) {
             let la = a.locate(s, eps);
             if la == Location::Outside {
                 continue;
