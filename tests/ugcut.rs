@@ -609,6 +609,41 @@ fn a_thin_strip_is_divided_on_neither_side() {
     );
 }
 
+/// A slab's end in two strips one above the other, 5.2 and 2.6 epsilon
+/// wide (fixtures/cut/slab-end-in-two-strips.ug, property seed 181 at 100
+/// times epsilon): the upper strip's vertices put feet on the edge between
+/// them, and the lower strip, not divided along its other side, was fanned
+/// from one corner into a triangle 0.94 epsilon wide (a T-vertex and a
+/// degenerate patch at every length). Now a foot is carried across a
+/// narrow strip (under 4 epsilon) whose sides run parallel, and the lower
+/// strip is cut into quads.
+#[test]
+fn a_foot_is_carried_across_a_narrow_strip() {
+    cuts_cleanly(
+        "cut/slab-end-in-two-strips.ug",
+        "0.0016508890435499946",
+        &["0.7", "0.3", "0.1", "2"],
+        1e-9,
+    );
+}
+
+/// A pipe's face ending in a corner of 52° with a jog of 2.9 epsilon
+/// nearly in line with its long bottom side
+/// (fixtures/cut/jog-at-a-sharp-corner.ug, property seed 86103 at 10 times
+/// epsilon): the jog's Delaunay apex was the side's far end, a needle 0.4
+/// epsilon wide, and the point straight across the jog lies outside the
+/// face (a degenerate patch at `-l 0.7` and `-l 2`). Where nothing nearly
+/// straight across is wider than epsilon, points further round are tried.
+#[test]
+fn a_jog_at_a_sharp_corner_gets_an_apex_inside_the_corner() {
+    cuts_cleanly(
+        "cut/jog-at-a-sharp-corner.ug",
+        "9.199512435307763e-5",
+        &["0.7", "2", "0.2", "0.05"],
+        1e-9,
+    );
+}
+
 /// A pipe's face with a spike 1.14 epsilon wide beside a vault piece
 /// (fixtures/cut/foot-beside-a-face-with-both-ends.ug, property seed 80023 on 3 ×
 /// 2 rooms with the wing, the roof and curved things): the pipe's long
