@@ -523,6 +523,30 @@ fn a_tents_tip_joins_a_neighbour() {
     }
 }
 
+/// A rug's tent whose tip a column's face also passes
+/// (fixtures/clean/tent-beside-a-column-face.ug, property seed 89021 at 10
+/// times epsilon): joined to its nearer neighbour (1.23 epsilon away), the
+/// tip bent the column's face 1.01 epsilon out of its plane; the other
+/// neighbour (1.27 epsilon away) keeps it planar, and is taken.
+#[test]
+fn a_tents_tip_joins_the_neighbour_that_keeps_faces_planar() {
+    let src = std::fs::read_to_string(fixture("clean/tent-beside-a-column-face.ug")).unwrap();
+    let eps = "1.6544248896576782e-4";
+    let out = run_ok("ugclean", &["-e", eps], Some(src.as_bytes()));
+    let r: serde_json::Value = serde_json::from_str(&run_ok(
+        "ugcheck",
+        &["--json", "-e", eps],
+        Some(out.as_bytes()),
+    ))
+    .unwrap();
+    assert_none(&r, &["nonplanar", "degenerate"], &out);
+    assert!(!out.contains("slab0.1.iv30 "), "the tip is joined:\n{out}");
+    assert!(
+        out.contains("(slab0.1.iv32 slab1.0.iv130"),
+        "the column's face keeps its corner:\n{out}"
+    );
+}
+
 /// Every defect category of ugcheck's JSON report.
 const DEFECTS: &[&str] = &[
     "inconsistent",
