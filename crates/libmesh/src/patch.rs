@@ -2805,7 +2805,15 @@ fn join_pairs(cx: &Ctx<'_>, tris: &[[VertexId; 3]], n: DVec3) -> Vec<Vec<VertexI
                 let ang = (-e0).angle_between(e1).to_degrees();
                 worst = worst.max((ang - 90.0).abs());
             }
-            if convex && worst < 45.0 {
+            // Nor a quadrilateral bent out of its own plane (as ugcheck
+            // measures it) by more than half an epsilon: a face a little
+            // off planar (a keyhole wall at georeferenced coordinates
+            // rounded to 0.1 mm, 0.9 epsilon) gave quads of a boundary
+            // vertex and three points on the face's plane 1.3 epsilon
+            // off their own. Its two triangles are planar.
+            let flat =
+                Plane::face_deviation(&[p.to_vec()]).is_some_and(|(d, _)| d <= 0.5 * cx.opts.eps);
+            if convex && worst < 45.0 && flat {
                 cands.push((worst, k, o, q));
             }
         }
