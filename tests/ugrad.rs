@@ -697,7 +697,41 @@ fn uniform_shooters_keep_the_closed_box_balance() {
     assert!(balance.abs() < 2e-3, "{balance}");
 }
 
+/// The same box with every patch written twice (a second face on the same
+/// vertices, as a CAD program writes a face for each side or twice over):
+/// each copy would receive every shot's light, the energy growing with
+/// every bounce. ugrad leaves one of each coincident pair out with a
+/// warning, and the box balances as before.
+#[test]
+fn coincident_copies_are_left_out_and_the_closed_box_balances() {
+    let balance = closed_box_balance_with(&[], true);
+    assert!(balance.abs() < 2e-3, "{balance}");
+}
+
+/// Faces lying on one another that are not copies (each wall written once
+/// whole and once as four pieces): the light grows without end, and ugrad
+/// stops with an error (exit 1) and writes nothing, instead of running on.
+#[test]
+fn overlapping_faces_stop_with_an_error() {
+    let out = run(
+        "ugrad",
+        &["--max-shots", "2000"],
+        Some(&std::fs::read(fixture("rad/walls-written-twice.ug")).unwrap()),
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("grows without end") && err.contains("ugclean"),
+        "{err}"
+    );
+    assert!(out.stdout.is_empty());
+}
+
 fn closed_box_balance(extra: &[&str]) -> f64 {
+    closed_box_balance_with(extra, false)
+}
+
+fn closed_box_balance_with(extra: &[&str], twice: bool) -> f64 {
     let xs = [0.0, 1.4, 1.6, 3.0];
     let mut s = String::from(
         "c_rgb grey 0.7 0.7 0.7;\n\
@@ -729,12 +763,27 @@ fn closed_box_balance(extra: &[&str]) -> f64 {
     let merged = run_ok("ugvlmerge", &["-q"], Some(s.as_bytes()));
     let check = run_ok("ugcheck", &["-q"], Some(merged.as_bytes()));
     assert!(check.contains("defects: 0"), "{check}");
-    let patches = run_ok("ugcut", &["-q", "-l", "6%"], Some(merged.as_bytes()));
+    let mut patches = run_ok("ugcut", &["-q", "-l", "6%"], Some(merged.as_bytes()));
+    if twice {
+        let copies: String = patches
+            .lines()
+            .filter_map(|l| l.strip_prefix("f "))
+            .map(|rest| format!("f copy.{rest}\n"))
+            .collect();
+        assert!(!copies.is_empty());
+        patches += &copies;
+    }
     let mut args = vec!["-v", "--output", "irradiance", "--visibility", "ray"];
     args.extend_from_slice(extra);
     let out = run("ugrad", &args, Some(patches.as_bytes()));
     assert!(out.status.success());
     let log = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(
+        twice,
+        log.contains("coincident faces left out"),
+        "{}",
+        log.lines().next().unwrap_or("")
+    );
     let unshot: f64 = log
         .split("unshot ")
         .last()

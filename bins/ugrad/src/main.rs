@@ -280,6 +280,24 @@ fn main() -> std::process::ExitCode {
                 .map_err(|e| cli::Failure::runtime(format!("error: {e}")))?;
             model = cut;
         }
+        // Coincident faces (duplicates, a face written twice, front and
+        // back copies) would each receive the light the other receives:
+        // the energy grows with every bounce (a box whose walls were
+        // written four times reached 700 times its emitted energy in 40
+        // shots, and the tail's iteration overflowed). One of each pair
+        // is left out, as ugclean's coincident step does.
+        let (kept, st) = clean::coincident::clean(&model, eps);
+        if !st.removed.is_empty() {
+            if !c.quiet {
+                let (gone, other, _) = &st.removed[0];
+                eprintln!(
+                    "warning: {} coincident face{} left out (the first, {gone}, coincides with {other}; run ugclean first to choose)",
+                    st.removed.len(),
+                    if st.removed.len() == 1 { "" } else { "s" },
+                );
+            }
+            model = kept;
+        }
         let mesh = libmesh::Mesh::from_model(&model, eps)
             .map_err(|e| cli::Failure::input(format!("error: {e}")))?;
         if !c.quiet {
@@ -419,6 +437,13 @@ fn main() -> std::process::ExitCode {
             bar.set_position(done as u64);
         });
         bar.finish_and_clear();
+        if stop == radiosity::Stop::Diverged {
+            return Err(cli::Failure::runtime(format!(
+                "error: the light grows without end (after {} shots the unshot energy is over {} times the emitted): faces lie on one another, each receiving the light of the other; run ugcopl and ugclean first (or the whole cleaning chain)",
+                solver.shots.len(),
+                radiosity::DIVERGED,
+            )));
+        }
         let t_solve = t_solve.elapsed();
         if !c.quiet {
             match stop {

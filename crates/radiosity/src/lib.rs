@@ -14,5 +14,5 @@ pub mod solver;
 mod tail;
 pub mod visibility;
 
-pub use solver::{Options, Output, ShotStats, Solver, Stop, TailStats};
+pub use solver::{DIVERGED, Options, Output, ShotStats, Solver, Stop, TailStats};
 pub use visibility::{PairCache, RayVisibility, Visibility};
