@@ -352,6 +352,11 @@ struct Moves {
     tilted: bool,
     /// Written in another order ([`shuffle`]).
     shuffled: bool,
+    /// Every coordinate rounded to this many decimals, last (`UG_ROUND=K`,
+    /// by hand): an export written with a fixed precision (Revit writes
+    /// metres to 4 decimals). With [`tilt`] the rounding bends faces, and
+    /// the tools take the precision as their epsilon (`cli::epsilon`).
+    rounded: Option<i32>,
 }
 
 /// Everything the issue asks of one seed, the building moved as `moves`
@@ -369,6 +374,12 @@ fn one_moved(seed: u64, moves: Moves) -> Vec<String> {
     }
     if moves.shuffled {
         m = shuffle(&m, seed);
+    }
+    if let Some(k) = moves.rounded {
+        let scale = 10f64.powi(k);
+        for v in &mut m.vertices {
+            v.pos = (v.pos * scale).round() / scale;
+        }
     }
     // (`UG_DUMP=DIR` writes each seed's model, as moved, to DIR/SEED.ug:
     // to run the tools on it by hand.)
@@ -639,7 +650,8 @@ fn dirty_buildings_placed_on_a_site() {
 /// with `UG_PLACED=1` every building placed as [`place`] does; with
 /// `UG_EPS_SCALE=K` every tool and check uses K times the default epsilon,
 /// with `UG_TILT=1` every building turned about an oblique axis ([`tilt`]),
-/// with `UG_SHUFFLE=1` written in another order ([`shuffle`]); `UG_DUMP=DIR`
+/// with `UG_SHUFFLE=1` written in another order ([`shuffle`]), with
+/// `UG_ROUND=K` every coordinate rounded to K decimals last; `UG_DUMP=DIR`
 /// writes each seed's model, as moved, to DIR/SEED.ug.
 #[test]
 #[ignore]
@@ -653,6 +665,7 @@ fn more_seeds() {
             placed: on("UG_PLACED"),
             tilted: on("UG_TILT"),
             shuffled: on("UG_SHUFFLE"),
+            rounded: std::env::var("UG_ROUND").ok().and_then(|k| k.parse().ok()),
         },
     );
 }

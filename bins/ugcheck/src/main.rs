@@ -59,13 +59,15 @@ fn main() -> std::process::ExitCode {
     let code = cli::run(|| {
         let c = &args.common;
         let model = c.load_flat()?;
-        let eps = cli::epsilon(args.epsilon, &model);
+        let chosen = cli::choose_epsilon(args.epsilon, &model);
+        let eps = chosen.value;
         c.verbose(format!(
             "epsilon {eps:e}{}",
-            if args.epsilon.is_some() {
-                ""
-            } else {
-                " (model-relative)"
+            match chosen.source {
+                cli::Source::Explicit => "",
+                cli::Source::Relative => " (model-relative)",
+                cli::Source::Precision => " (the precision the coordinates are written with)",
+                cli::Source::Carried => " (carried from an earlier tool: {ugkit epsilon})",
             }
         ));
         let t = std::time::Instant::now();

@@ -160,6 +160,18 @@ impl Common {
         self.write(&buf)
     }
 
+    /// The note that the epsilon was taken from the input's precision
+    /// ([`precision_epsilon`]): once, by the first tool of a pipeline (the
+    /// next ones read it from the `{ugkit epsilon E}` comment); not with
+    /// `-q`.
+    pub fn note_precision(&self, e: f64) {
+        if !self.quiet {
+            eprintln!(
+                "note: epsilon {e:e}, the precision the coordinates are written with: faces turned off the axes are bent by that rounding (the default would be 1e-6 of the model's size; -e sets it)"
+            );
+        }
+    }
+
     /// Prints a note on stderr when `-v` was given.
     pub fn verbose(&self, msg: impl AsRef<str>) {
         if self.verbose > 0 {
@@ -304,8 +316,17 @@ pub fn filter(
 ) -> ExitCode {
     run(|| {
         let model = common.load_flat()?;
-        let eps = epsilon(explicit_epsilon, &model);
-        let out = body(model, eps)?;
+        let eps = choose_epsilon(explicit_epsilon, &model);
+        if eps.source == Source::Precision {
+            common.note_precision(eps.value);
+        }
+        let mut out = body(model, eps.value)?;
+        // An epsilon chosen from the input's precision goes on down the
+        // pipeline: the next tool's coordinates (cuts, welds) are no
+        // longer rounded.
+        if matches!(eps.source, Source::Precision | Source::Carried) {
+            carry_epsilon(&mut out, eps.value);
+        }
         common.write_model(&out)
     })
 }
@@ -313,16 +334,137 @@ pub fn filter(
 /// The model-relative default epsilon: this fraction of the bounding-box diagonal.
 pub const RELATIVE_EPSILON: f64 = 1e-6;
 
-/// The epsilon a tool uses: `-e` when given (absolute units), else
-/// [`RELATIVE_EPSILON`] times the model's bounding-box diagonal (1e-9 for an empty or point model).
+/// The epsilon a tool uses: `-e` when given (absolute units), else the one
+/// an earlier tool of the pipeline chose from the input's precision (a
+/// `{ugkit epsilon E}` comment, see [`Epsilon`]), else that precision
+/// where it explains the faces' bends ([`precision_epsilon`]), else
+/// [`RELATIVE_EPSILON`] times the model's bounding-box diagonal (1e-9 for
+/// an empty or point model).
 pub fn epsilon(explicit: Option<f64>, m: &ug::Model) -> f64 {
+    choose_epsilon(explicit, m).value
+}
+
+/// The comment that carries an epsilon chosen from the input's precision
+/// down a pipeline: `{ugkit epsilon E}`. The tools that meet it without
+/// `-e` use E, and write it on.
+pub const EPSILON_COMMENT: &str = "ugkit epsilon";
+
+/// Where a tool's epsilon came from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Source {
+    /// `-e`.
+    Explicit,
+    /// A `{ugkit epsilon E}` comment in the input.
+    Carried,
+    /// The precision the input's coordinates were written with
+    /// ([`precision_epsilon`]).
+    Precision,
+    /// [`RELATIVE_EPSILON`] of the model's size.
+    Relative,
+}
+
+/// A tool's epsilon and where it came from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Epsilon {
+    pub value: f64,
+    pub source: Source,
+}
+
+/// [`epsilon`], with its source.
+pub fn choose_epsilon(explicit: Option<f64>, m: &ug::Model) -> Epsilon {
     if let Some(e) = explicit {
-        return e;
+        return Epsilon {
+            value: e,
+            source: Source::Explicit,
+        };
     }
-    match m.bounds() {
+    if let Some(e) = carried_epsilon(m) {
+        return Epsilon {
+            value: e,
+            source: Source::Carried,
+        };
+    }
+    let relative = match m.bounds() {
         Some((lo, hi)) if (hi - lo).length() > 0.0 => RELATIVE_EPSILON * (hi - lo).length(),
         _ => 1e-9,
+    };
+    match precision_epsilon(m, relative) {
+        Some(q) => Epsilon {
+            value: q,
+            source: Source::Precision,
+        },
+        None => Epsilon {
+            value: relative,
+            source: Source::Relative,
+        },
     }
+}
+
+/// The epsilon of a `{ugkit epsilon E}` comment, if the model has one.
+pub fn carried_epsilon(m: &ug::Model) -> Option<f64> {
+    m.items.iter().find_map(|it| match it {
+        ug::Item::Comment(c) => c
+            .trim()
+            .strip_prefix(EPSILON_COMMENT)
+            .and_then(|r| r.trim().parse::<f64>().ok())
+            .filter(|e| e.is_finite() && *e > 0.0),
+        _ => None,
+    })
+}
+
+/// Puts a `{ugkit epsilon E}` comment first in `m` (replacing any other).
+pub fn carry_epsilon(m: &mut ug::Model, e: f64) {
+    m.items
+        .retain(|it| !matches!(it, ug::Item::Comment(c) if c.trim().starts_with(EPSILON_COMMENT)));
+    m.items
+        .insert(0, ug::Item::Comment(format!("{EPSILON_COMMENT} {e:e}")));
+}
+
+/// At most this many times the relative epsilon is taken from the input's
+/// precision ([`precision_epsilon`]).
+pub const PRECISION_LIMIT: f64 = 100.0;
+
+/// The precision the model's coordinates were written with, as an
+/// epsilon, where it is what bends its faces: the coarsest power of ten
+/// q that every coordinate is a whole multiple of, when q is more than
+/// `relative` (and at most [`PRECISION_LIMIT`] times it) and some face
+/// is bent out of its plane by more than `relative` and at most 2q. An
+/// export rounded to 4 decimals (0.1 mm, as Revit writes metres) whose
+/// walls are turned off the axes has faces bent by up to that rounding,
+/// a few times the relative epsilon of a 20 m building; at the relative
+/// epsilon the chain cut such faces into hundreds of pieces and still
+/// left defects (a helper's exports, 2026-12-06: 4 faces → 1,118), at q
+/// it leaves a few clean pieces. A model whose faces are flat (or bent by
+/// more than the rounding explains) keeps the relative epsilon.
+pub fn precision_epsilon(m: &ug::Model, relative: f64) -> Option<f64> {
+    if relative.is_nan() || relative <= 0.0 {
+        return None;
+    }
+    let coords: Vec<f64> = m.top_vertices().flat_map(|v| m.pos(v).to_array()).collect();
+    if coords.len() < 9 {
+        return None;
+    }
+    // Powers of ten above `relative`, up to PRECISION_LIMIT times it,
+    // coarsest first.
+    let lo = relative.log10().floor() as i32 + 1;
+    let hi = (relative * PRECISION_LIMIT).log10().floor() as i32;
+    let whole = |k: i32| {
+        let scale = 10f64.powi(-k);
+        coords.iter().all(|&x| {
+            let y = x * scale;
+            (y - y.round()).abs() <= 1e-3
+        })
+    };
+    let q = (lo..=hi).rev().find(|&k| whole(k)).map(|k| 10f64.powi(k))?;
+    let bent = m.top_faces().any(|f| {
+        let pts: Vec<Vec<geom::DVec3>> = m.faces[f.idx()]
+            .contours
+            .iter()
+            .map(|c| c.iter().map(|&v| m.pos(v)).collect())
+            .collect();
+        geom::Plane::face_deviation(&pts).is_some_and(|(d, _)| d > relative && d <= 2.0 * q)
+    });
+    bent.then_some(q)
 }
 
 /// Parses an `-e` value: a finite, non-negative number.
@@ -336,6 +478,54 @@ pub fn parse_epsilon(s: &str) -> Result<f64, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn model(src: &str) -> ug::Model {
+        ug::parse(src.as_bytes(), "t").unwrap().model
+    }
+
+    /// A quad turned off the axes, its corners rounded to 4 decimals:
+    /// bent by the rounding, more than 1e-6 of its size.
+    const ROUNDED: &str = "v a 1.2346 2.3457 0.4568; v b 4.12 2.6162 -0.3184; \
+        v c 4.0002 4.5975 -0.073; v d 1.1147 4.3269 0.7021; f q (a b c d);";
+
+    #[test]
+    fn the_precision_of_rounded_turned_faces_is_the_epsilon() {
+        let m = model(ROUNDED);
+        let relative = epsilon(
+            None,
+            &model("v a 1.1147 2.3457 -0.3184; v b 4.12 4.5975 0.7021;"),
+        );
+        let e = choose_epsilon(None, &m);
+        // Bent by more than the relative epsilon, so the rounding's.
+        let (bend, _) =
+            geom::Plane::face_deviation(&[m.top_vertices().map(|v| m.pos(v)).collect()]).unwrap();
+        assert!(bend > relative && bend < 2e-4, "{bend}");
+        assert_eq!(e.source, Source::Precision);
+        assert_eq!(e.value, 1e-4);
+        // `-e` wins; a carried comment is used as it is.
+        assert_eq!(epsilon(Some(0.5), &m), 0.5);
+        let mut c = m.clone();
+        carry_epsilon(&mut c, 3e-4);
+        assert_eq!(choose_epsilon(None, &c).value, 3e-4);
+        assert_eq!(choose_epsilon(None, &c).source, Source::Carried);
+    }
+
+    #[test]
+    fn flat_faces_and_coarse_or_full_precision_keep_the_relative_epsilon() {
+        // Axis-aligned with short decimals: flat, nothing to explain.
+        let flat = model("v a 0 0 0; v b 2.5 0 0; v c 2.5 1.25 0; v d 0 1.25 0; f q (a b c d);");
+        assert_eq!(choose_epsilon(None, &flat).source, Source::Relative);
+        // Bent far beyond what the rounding explains (a twisted quad).
+        let twisted = model("v a 0 0 0; v b 1 0 0; v c 1 1 0.3; v d 0 1 0; f q (a b c d);");
+        assert_eq!(choose_epsilon(None, &twisted).source, Source::Relative);
+        // Full precision: no power of ten to round to.
+        let full = model(
+            "v a 0 0 0; v b 3.14159265358979 1.4142135623731 0.577350269189626; \
+             v c 2.44948974278318 3.60555127546399 2.71828182845905; \
+             v d -0.692102 2.191398 2.1409312; f q (a b c d);",
+        );
+        assert_eq!(choose_epsilon(None, &full).source, Source::Relative);
+    }
 
     #[test]
     fn files_are_replaced_atomically_and_devices_written_in_place() {
