@@ -179,8 +179,8 @@ fn ugflip_orients_the_same_before_and_after_the_grouper() {
 /// (fixtures/clean/rounded-turned-slab-and-walls.ug). The rounding bends
 /// the faces by up to 1e-4, five times the relative epsilon; at that
 /// epsilon the chain cut the 4 faces into 1,118 pieces and left 47
-/// defects. The first tool takes the coordinates' precision as epsilon
-/// (with a note), writes it on as a `{ugkit epsilon 1e-4}` comment, and
+/// defects. The first tool takes twice the coordinates' precision as
+/// epsilon (with a note), writes it on as a `{ugkit epsilon 2e-4}` comment, and
 /// every later tool, ugcheck included, uses it: a few clean pieces.
 #[test]
 fn an_export_rounded_to_its_precision_is_cleaned_at_that_precision() {
@@ -188,7 +188,7 @@ fn an_export_rounded_to_its_precision_is_cleaned_at_that_precision() {
     let first = run("ugplanar", &[], Some(&input));
     assert!(first.status.success());
     let note = String::from_utf8_lossy(&first.stderr);
-    assert!(note.contains("epsilon 1e-4"), "{note}");
+    assert!(note.contains("epsilon 2e-4"), "{note}");
     let stages: Vec<(&str, &[&str])> = vec![
         ("ugvlmerge", &["-q"]),
         ("ugflip", &["-q"]),
@@ -198,9 +198,9 @@ fn an_export_rounded_to_its_precision_is_cleaned_at_that_precision() {
     ];
     let out = pipe(&first.stdout, &stages);
     let text = String::from_utf8_lossy(&out);
-    assert!(text.starts_with("{ugkit epsilon 1e-4}"), "{text}");
+    assert!(text.starts_with("{ugkit epsilon 2e-4}"), "{text}");
     let r = check(&out);
-    assert_eq!(r["epsilon"].as_f64(), Some(1e-4), "{}", r["epsilon"]);
+    assert_eq!(r["epsilon"].as_f64(), Some(2e-4), "{}", r["epsilon"]);
     for key in [
         "nonplanar",
         "tvertices",

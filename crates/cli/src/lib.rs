@@ -167,7 +167,7 @@ impl Common {
     pub fn note_precision(&self, e: f64) {
         if !self.quiet {
             eprintln!(
-                "note: epsilon {e:e}, the precision the coordinates are written with: faces turned off the axes are bent by that rounding (the default would be 1e-6 of the model's size; -e sets it)"
+                "note: epsilon {e:e}, twice the precision the coordinates are written with: faces turned off the axes are bent by that rounding (the default would be 1e-6 of the model's size; -e sets it)"
             );
         }
     }
@@ -420,15 +420,25 @@ pub fn carry_epsilon(m: &mut ug::Model, e: f64) {
         .insert(0, ug::Item::Comment(format!("{EPSILON_COMMENT} {e:e}")));
 }
 
+/// The epsilon taken from a precision q is this many times q: a rounded
+/// point lies up to 0.87 q from where it was meant, a rounded edge's ends
+/// as much, so a point meant to lie on an edge may lie 1.7 q from it (at
+/// q itself, tilted buildings rounded to 4 decimals kept T-vertices on 12
+/// of 60 seeds; docs/decisions.md).
+pub const PRECISION_FACTOR: f64 = 2.0;
+
 /// At most this many times the relative epsilon is taken from the input's
 /// precision ([`precision_epsilon`]).
 pub const PRECISION_LIMIT: f64 = 100.0;
 
-/// The precision the model's coordinates were written with, as an
-/// epsilon, where it is what bends its faces: the coarsest power of ten
-/// q that every coordinate is a whole multiple of, when q is more than
+/// Twice the precision the model's coordinates were written with, as an
+/// epsilon ([`PRECISION_FACTOR`]), where it is what bends its faces: the
+/// coarsest power of ten q that every coordinate is a whole multiple of,
+/// when q is more than
 /// `relative` (and at most [`PRECISION_LIMIT`] times it) and some face
-/// is bent out of its plane by more than `relative` and at most 2q. An
+/// is bent out of its plane by more than `relative` and at most 2q, or
+/// two faces on one edge are (a face of one lies that far from the
+/// other's plane: a polygon exported as triangles). An
 /// export rounded to 4 decimals (0.1 mm, as Revit writes metres) whose
 /// walls are turned off the axes has faces bent by up to that rounding,
 /// a few times the relative epsilon of a 20 m building; at the relative
@@ -456,15 +466,59 @@ pub fn precision_epsilon(m: &ug::Model, relative: f64) -> Option<f64> {
         })
     };
     let q = (lo..=hi).rev().find(|&k| whole(k)).map(|k| 10f64.powi(k))?;
-    let bent = m.top_faces().any(|f| {
-        let pts: Vec<Vec<geom::DVec3>> = m.faces[f.idx()]
-            .contours
-            .iter()
-            .map(|c| c.iter().map(|&v| m.pos(v)).collect())
-            .collect();
-        geom::Plane::face_deviation(&pts).is_some_and(|(d, _)| d > relative && d <= 2.0 * q)
+    let explained = |d: f64| d > relative && d <= 2.0 * q;
+    let faces: Vec<Vec<Vec<geom::DVec3>>> = m
+        .top_faces()
+        .map(|f| {
+            m.faces[f.idx()]
+                .contours
+                .iter()
+                .map(|c| c.iter().map(|&v| m.pos(v)).collect())
+                .collect()
+        })
+        .collect();
+    let fits: Vec<Option<(f64, geom::Plane)>> = faces
+        .iter()
+        .map(|f| geom::Plane::face_deviation(f))
+        .collect();
+    if fits.iter().flatten().any(|&(d, _)| explained(d)) {
+        return Some(PRECISION_FACTOR * q);
+    }
+    // Or two faces on one edge (by position: an export may give each face
+    // its own copies) lying in one plane but for the rounding: a polygon
+    // written as triangles, each flat, the pair bent.
+    type Key = ([u64; 3], [u64; 3]);
+    let bits = |p: geom::DVec3| p.to_array().map(f64::to_bits);
+    let mut by_edge: std::collections::HashMap<Key, Vec<usize>> = Default::default();
+    for (k, f) in faces.iter().enumerate() {
+        for c in f {
+            for i in 0..c.len() {
+                let (a, b) = (bits(c[i]), bits(c[(i + 1) % c.len()]));
+                let key = if a < b { (a, b) } else { (b, a) };
+                let on = by_edge.entry(key).or_default();
+                if on.len() < 4 && !on.contains(&k) {
+                    on.push(k);
+                }
+            }
+        }
+    }
+    let off = |f: usize, g: usize| {
+        fits[f].map(|(_, plane)| {
+            faces[g]
+                .iter()
+                .flatten()
+                .map(|&p| plane.dist(p).abs())
+                .fold(0.0, f64::max)
+        })
+    };
+    let bent_pair = by_edge.values().any(|on| {
+        on.iter().enumerate().any(|(i, &f)| {
+            on[i + 1..]
+                .iter()
+                .any(|&g| off(f, g).is_some_and(explained) || off(g, f).is_some_and(explained))
+        })
     });
-    bent.then_some(q)
+    bent_pair.then_some(PRECISION_FACTOR * q)
 }
 
 /// Parses an `-e` value: a finite, non-negative number.
@@ -501,13 +555,23 @@ mod tests {
             geom::Plane::face_deviation(&[m.top_vertices().map(|v| m.pos(v)).collect()]).unwrap();
         assert!(bend > relative && bend < 2e-4, "{bend}");
         assert_eq!(e.source, Source::Precision);
-        assert_eq!(e.value, 1e-4);
+        assert_eq!(e.value, 2e-4);
         // `-e` wins; a carried comment is used as it is.
         assert_eq!(epsilon(Some(0.5), &m), 0.5);
         let mut c = m.clone();
         carry_epsilon(&mut c, 3e-4);
         assert_eq!(choose_epsilon(None, &c).value, 3e-4);
         assert_eq!(choose_epsilon(None, &c).source, Source::Carried);
+        // The same quad as two triangles on their own vertex copies (as a
+        // triangle-soup export writes it): each flat, the pair bent.
+        let soup = model(
+            "v a 1.2346 2.3457 0.4568; v b 4.12 2.6162 -0.3184; \
+             v c 4.0002 4.5975 -0.073; v d 1.1147 4.3269 0.7021; \
+             v a2 1.2346 2.3457 0.4568; v c2 4.0002 4.5975 -0.073; \
+             f t1 (a b c); f t2 (a2 c2 d);",
+        );
+        assert_eq!(choose_epsilon(None, &soup).source, Source::Precision);
+        assert_eq!(choose_epsilon(None, &soup).value, 2e-4);
     }
 
     #[test]
