@@ -558,17 +558,8 @@ fn feet_and_thin(m: &Model, eps: f64, planes: &FacePlanes) -> (Feet, Thin) {
                 // Nor where a face is folded back onto this one along that
                 // edge and the foot lies within 3 epsilon / sin of it (see
                 // above).
-                let folded = |e: (VertexId, VertexId)| {
-                    let foot = p + (q - p) * t;
-                    let (a, b) = (m.pos(e.0), m.pos(e.1));
-                    let dir = (b - a).normalize_or_zero();
-                    let w = foot - a;
-                    let across = w - dir * w.dot(dir);
-                    let h = across.length();
-                    h > 0.0
-                        && fold_sin(m, planes, &|g| fold_normal(m, g), f, e, across / h)
-                            .is_some_and(|s| h * s < 3.0 * eps)
-                };
+                let folded =
+                    |e: (VertexId, VertexId)| folded_near(m, planes, f, e, p + (q - p) * t, eps);
                 let corner = |e: (VertexId, VertexId)| {
                     (e.0 == g.0 || e.0 == g.1 || e.1 == g.0 || e.1 == g.1)
                         && (m.pos(e.0).distance(m.pos(e.1)) < JOG * eps || folded(e))
@@ -637,6 +628,28 @@ fn feet_and_thin(m: &Model, eps: f64, planes: &FacePlanes) -> (Feet, Thin) {
     (out, thin)
 }
 
+/// Whether another face is folded back onto face `f` along its contour
+/// edge `e` ([`fold_sin`]) by so little that the point `x` in `f`, at
+/// distance h from the edge's line, lies within 3 epsilon of that face's
+/// plane (h·sin < 3·`eps`).
+fn folded_near(
+    m: &Model,
+    planes: &FacePlanes,
+    f: FaceId,
+    e: (VertexId, VertexId),
+    x: DVec3,
+    eps: f64,
+) -> bool {
+    let (a, b) = (m.pos(e.0), m.pos(e.1));
+    let dir = (b - a).normalize_or_zero();
+    let w = x - a;
+    let across = w - dir * w.dot(dir);
+    let h = across.length();
+    h > 0.0
+        && fold_sin(m, planes, &|g| fold_normal(m, g), f, e, across / h)
+            .is_some_and(|s| h * s < 3.0 * eps)
+}
+
 /// Carries each foot across the narrow strips of a face whose sides run
 /// parallel: a foot on one side of a strip of face `f` (within 5° of
 /// parallel to the other side, more than `eps` and under [`NARROW`]·`eps`
@@ -669,16 +682,6 @@ fn carry_across_strips(
         .iter()
         .flat_map(|k| feet[k].iter().map(move |&t| (*k, t)))
         .collect();
-    let folded = |f: FaceId, e: (VertexId, VertexId), from: DVec3, h: f64| {
-        let (a, b) = (m.pos(e.0), m.pos(e.1));
-        let dir = (b - a).normalize_or_zero();
-        let w = from - a;
-        let across = w - dir * w.dot(dir);
-        let l = across.length();
-        l > 0.0
-            && fold_sin(m, planes, &|g| fold_normal(m, g), f, e, across / l)
-                .is_some_and(|s| h * s < 3.0 * eps)
-    };
     for _ in 0..4 {
         if todo.is_empty() {
             break;
@@ -701,7 +704,7 @@ fn carry_across_strips(
                     continue;
                 }
                 let y = p + (q - p) * s;
-                if folded(f, e, y, d) || folded(f, g, x, d) {
+                if folded_near(m, planes, f, e, y, eps) || folded_near(m, planes, f, g, x, eps) {
                     continue;
                 }
                 // Nor where the cut across passes within 2·eps of a
