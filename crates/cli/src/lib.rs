@@ -434,12 +434,11 @@ pub const PRECISION_LIMIT: f64 = 100.0;
 /// Twice the precision the model's coordinates were written with, as an
 /// epsilon ([`PRECISION_FACTOR`]), where it is what bends its faces: the
 /// coarsest power of ten q that every coordinate is a whole multiple of,
-/// when q is more than
-/// `relative` (and at most [`PRECISION_LIMIT`] times it) and some face
-/// is bent out of its plane by more than `relative` and at most 2q, or
-/// two faces on one edge are (a face of one lies that far from the
-/// other's plane: a polygon exported as triangles). An
-/// export rounded to 4 decimals (0.1 mm, as Revit writes metres) whose
+/// when q is more than `relative` (and at most [`PRECISION_LIMIT`] times
+/// it) and some face is bent out of its plane by more than `relative` and
+/// at most 2q, or two faces on one edge are (a face of one lies that far
+/// from the other's plane: a polygon exported as triangles). An export
+/// rounded to 4 decimals (0.1 mm, as Revit writes metres) whose
 /// walls are turned off the axes has faces bent by up to that rounding,
 /// a few times the relative epsilon of a 20 m building; at the relative
 /// epsilon the chain cut such faces into hundreds of pieces and still
@@ -450,17 +449,14 @@ pub fn precision_epsilon(m: &ug::Model, relative: f64) -> Option<f64> {
     if relative.is_nan() || relative <= 0.0 {
         return None;
     }
-    let coords: Vec<f64> = m.top_vertices().flat_map(|v| m.pos(v).to_array()).collect();
-    if coords.len() < 9 {
-        return None;
-    }
+    m.top_vertices().nth(2)?;
     // Powers of ten above `relative`, up to PRECISION_LIMIT times it,
     // coarsest first.
     let lo = relative.log10().floor() as i32 + 1;
     let hi = (relative * PRECISION_LIMIT).log10().floor() as i32;
     let whole = |k: i32| {
         let scale = 10f64.powi(-k);
-        coords.iter().all(|&x| {
+        m.top_vertices().flat_map(|v| m.pos(v).to_array()).all(|x| {
             let y = x * scale;
             (y - y.round()).abs() <= 1e-3
         })

@@ -366,8 +366,7 @@ impl Transport {
                 };
                 for (p, w, m) in r {
                     tr.patch.push(p);
-                    tr.weight
-                        .push(if k < 1.0 { (w as f64 * k) as f32 } else { w });
+                    tr.weight.push((w as f64 * k) as f32);
                     if p as usize >= np {
                         tr.vis.push(m);
                     }
