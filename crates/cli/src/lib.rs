@@ -428,8 +428,13 @@ pub fn carry_epsilon(m: &mut ug::Model, e: f64) {
 pub const PRECISION_FACTOR: f64 = 2.0;
 
 /// At most this many times the relative epsilon is taken from the input's
-/// precision ([`precision_epsilon`]).
-pub const PRECISION_LIMIT: f64 = 100.0;
+/// precision ([`precision_epsilon`]): an epsilon of at most 2e-3 of the
+/// model's size. Exports in whole millimetres (or metres to 3 decimals)
+/// of a building from 1 m across are covered (a 7.5 m building's q is 133
+/// times its relative epsilon); a hand-written model in whole units needs
+/// to be 1,000 units across before its unit could be taken, and then only
+/// if a face is bent by at most 2 units (docs/decisions.md).
+pub const PRECISION_LIMIT: f64 = 1000.0;
 
 /// Twice the precision the model's coordinates were written with, as an
 /// epsilon ([`PRECISION_FACTOR`]), where it is what bends its faces: the
@@ -568,6 +573,25 @@ mod tests {
         );
         assert_eq!(choose_epsilon(None, &soup).source, Source::Precision);
         assert_eq!(choose_epsilon(None, &soup).value, 2e-4);
+        // Rounded to 1 mm (whole millimetres, written in metres) on a 7.8 m
+        // model: q is 129 times the relative epsilon, within the limit.
+        let mm = model(
+            "v a 0.123 0.457 0.411; v b 4.432 1.801 0.077; \
+             v c 3.301 5.977 -0.201; v d -1.009 4.633 0.133; f q (a b c d);",
+        );
+        let (bend, _) = geom::Plane::face_deviation(&[m_face(&mm, 0)]).unwrap();
+        assert!(bend > epsilon_relative(&mm) && bend < 2e-3, "{bend}");
+        assert_eq!(choose_epsilon(None, &mm).source, Source::Precision);
+        assert_eq!(choose_epsilon(None, &mm).value, 2e-3);
+    }
+
+    fn m_face(m: &ug::Model, k: usize) -> Vec<geom::DVec3> {
+        m.faces[k].contours[0].iter().map(|&v| m.pos(v)).collect()
+    }
+
+    fn epsilon_relative(m: &ug::Model) -> f64 {
+        let (lo, hi) = m.bounds().unwrap();
+        RELATIVE_EPSILON * (hi - lo).length()
     }
 
     #[test]
@@ -585,6 +609,11 @@ mod tests {
              v d -0.692102 2.191398 2.1409312; f q (a b c d);",
         );
         assert_eq!(choose_epsilon(None, &full).source, Source::Relative);
+        // A hand-written model in whole units, 30 units across, with a face
+        // bent by a unit: its unit is 30,000 times the relative epsilon.
+        let units =
+            model("v a 0 0 0; v b 20 0 0; v c 20 20 1; v d 0 20 0; f q (a b c d); v e 10 10 10;");
+        assert_eq!(choose_epsilon(None, &units).source, Source::Relative);
     }
 
     #[test]
