@@ -825,3 +825,39 @@ fn the_kept_face_takes_a_twin_contour_its_neighbours_walk() {
     );
     assert_none(&r, DEFECTS, &out);
 }
+
+/// A point left within epsilon of another face's edge goes into the edge:
+/// ugclean's last step, so that the chain writes no T-vertex whatever the
+/// steps before left (property seed 95032, rounded to 1 mm: ugcopl left
+/// a tile sliver's edge 0.9 epsilon from a corner that pieces enclosed
+/// and then removed had used). Nothing here is coincident or enclosed.
+#[test]
+fn a_point_left_on_an_edge_goes_into_it() {
+    let src = "v a 0 0 0; v b 1 0 0; v c 1 1 0; v d 0 1 0;\n\
+               v m 1.0009 0.5 0; v e 2 0 0; v f 2 1 0;\n\
+               f left (a b c d);\nf right (b e f c m);\n";
+    let eps = "1e-3";
+    let r = |text: &str| -> serde_json::Value {
+        serde_json::from_str(&run_ok(
+            "ugcheck",
+            &["--json", "-e", eps],
+            Some(text.as_bytes()),
+        ))
+        .unwrap()
+    };
+    assert_eq!(r(src)["tvertices"].as_array().unwrap().len(), 1);
+    let out = run_ok("ugclean", &["-e", eps], Some(src.as_bytes()));
+    let after = r(&out);
+    assert_eq!(after["tvertices"].as_array().unwrap().len(), 0, "{out}");
+    assert!(out.contains("f left (a b m c d);"), "{out}");
+    assert!(out.contains("f right (b e f c m);"), "{out}");
+    for key in [
+        "nonplanar",
+        "intersecting",
+        "overlapping",
+        "degenerate",
+        "inconsistent",
+    ] {
+        assert_eq!(after[key].as_array().unwrap().len(), 0, "{key}: {out}");
+    }
+}
