@@ -861,3 +861,40 @@ fn a_point_left_on_an_edge_goes_into_it() {
         assert_eq!(after[key].as_array().unwrap().len(), 0, "{key}: {out}");
     }
 }
+
+/// A wall's corner 1.002 epsilon from a floor's corner and 0.71 epsilon
+/// from both the floor's edges there joins the floor's corner (property
+/// seed 95021 rounded to 1 mm, with `--keep-enclosed`: a slab's cut point
+/// by a desk foot's corner). Put into the edges, it made a spike at the
+/// corner, which the repair took out with the floor's corner.
+#[test]
+fn a_point_just_beyond_epsilon_of_a_corner_joins_it() {
+    let src = "v a 0 0 0; v b 1 0 0; v c 1 1 0; v d 0 1 0;\n\
+               v m 0.9992915 0.0007085 0; v n 1.5 -0.5 0; v n2 1.5 -0.5 1;\n\
+               v m2 0.9992915 0.0007085 1;\n\
+               f floor (a b c d);\nf wall (m n n2 m2);\n";
+    let eps = "1e-3";
+    let r = |text: &str| -> serde_json::Value {
+        serde_json::from_str(&run_ok(
+            "ugcheck",
+            &["--json", "-e", eps],
+            Some(text.as_bytes()),
+        ))
+        .unwrap()
+    };
+    assert!(!r(src)["tvertices"].as_array().unwrap().is_empty());
+    let out = run_ok("ugclean", &["-e", eps], Some(src.as_bytes()));
+    assert!(out.contains("f floor (a b c d);"), "{out}");
+    assert!(out.contains("f wall (b n n2 m2);"), "{out}");
+    let after = r(&out);
+    for key in [
+        "tvertices",
+        "nonplanar",
+        "intersecting",
+        "overlapping",
+        "degenerate",
+        "inconsistent",
+    ] {
+        assert_eq!(after[key].as_array().unwrap().len(), 0, "{key}: {out}");
+    }
+}

@@ -1020,7 +1020,7 @@ fn cut_rounds(m: &Model, opts: Options, replay: bool) -> Result<(Model, Stats), 
         // which a patch edge leaving that corner passes within epsilon of
         // (a T-vertex): it joins the corner (property seed 3327, a ramp's
         // needle piece 1.02 epsilon wide at a floor piece's corner).
-        joins.extend(near_corner_joins(&model, &out, opts.eps));
+        joins.extend(winged::weld::near_corner_joins(&model, &out, opts.eps));
         joins.sort_unstable();
         joins.dedup();
         if joins.is_empty() || round == 3 {
@@ -1031,92 +1031,6 @@ fn cut_rounds(m: &Model, opts: Options, replay: bool) -> Result<(Model, Stats), 
         before = Some(std::mem::replace(&mut model, joined));
     }
     unreachable!()
-}
-
-/// The joins that remove T-vertices a patch edge of `out` makes where it
-/// leaves a corner: a vertex of `model` more than epsilon and at most 2
-/// epsilon from the corner (the weld left the two apart) that lies within
-/// epsilon of the edge's interior joins the corner. Such pairs are rare,
-/// so this looks only at the edges leaving a vertex that has one.
-fn near_corner_joins(model: &Model, out: &Model, eps: f64) -> Joins {
-    let used: Vec<VertexId> = {
-        let mut v: Vec<VertexId> = model
-            .faces
-            .iter()
-            .flat_map(|f| f.contours.iter().flatten().copied())
-            .collect();
-        v.sort_unstable();
-        v.dedup();
-        v
-    };
-    let cell = 2.0 * eps;
-    let key = |p: DVec3| {
-        let q = (p / cell).floor();
-        (q.x as i64, q.y as i64, q.z as i64)
-    };
-    // Cells of 2 epsilon, each a list through `next` (index into `used`).
-    const NONE: u32 = u32::MAX;
-    let mut head: FxHashMap<(i64, i64, i64), u32> = FxHashMap::default();
-    let mut next = vec![NONE; used.len()];
-    for (i, &v) in used.iter().enumerate() {
-        let h = head.entry(key(model.pos(v))).or_insert(NONE);
-        next[i] = *h;
-        *h = i as u32;
-    }
-    let mut partners: FxHashMap<VertexId, Vec<VertexId>> = FxHashMap::default();
-    for &v in &used {
-        let p = model.pos(v);
-        let (x, y, z) = key(p);
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    let mut i = head.get(&(x + dx, y + dy, z + dz)).copied().unwrap_or(NONE);
-                    while i != NONE {
-                        let w = used[i as usize];
-                        let d = model.pos(w).distance(p);
-                        if w != v && d > eps && d <= cell {
-                            partners.entry(v).or_default().push(w);
-                        }
-                        i = next[i as usize];
-                    }
-                }
-            }
-        }
-    }
-    if partners.is_empty() {
-        return Vec::new();
-    }
-    let mut has = vec![false; out.vertices.len()];
-    for v in partners.keys() {
-        has[v.idx()] = true;
-    }
-    let mut joins = Vec::new();
-    for f in &out.faces {
-        for c in &f.contours {
-            for i in 0..c.len() {
-                let (a, b) = (c[i], c[(i + 1) % c.len()]);
-                for (x, y) in [(a, b), (b, a)] {
-                    if !has[x.idx()] {
-                        continue;
-                    }
-                    for &w in &partners[&x] {
-                        if w != y
-                            && geom::predicates::on_edge_interior(
-                                out.pos(w),
-                                out.pos(x),
-                                out.pos(y),
-                                eps,
-                            )
-                            .is_some()
-                        {
-                            joins.push((w, x));
-                        }
-                    }
-                }
-            }
-        }
-    }
-    joins
 }
 
 /// The model's top-level faces for point queries: the faces at each
