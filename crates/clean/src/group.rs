@@ -222,8 +222,15 @@ pub fn collapse_tents(model: Model, eps: f64) -> (Model, usize) {
     // near, and the repair would take it out again (property seed 95021
     // rounded to 1 mm, with `--keep-enclosed`: a slab's cut point 1.002
     // epsilon from a desk foot's corner, 0.99 epsilon from both its edges).
-    let near = winged::weld::near_corner_joins(mesh.model(), mesh.model(), eps);
-    let mut changed = !near.is_empty() && winged::weld::join_vertices(&mut mesh, &near, eps).0 > 0;
+    // (A corner takes one point a round: a few rounds.)
+    let mut changed = false;
+    for _ in 0..TENT_ROUNDS {
+        let near = winged::weld::near_corner_joins(mesh.model(), mesh.model(), eps);
+        if near.is_empty() || winged::weld::join_vertices(&mut mesh, &near, eps).0 == 0 {
+            break;
+        }
+        changed = true;
+    }
     changed |= split_edges(&mut mesh, eps).inserted > 0;
     // Putting the points back into the edges can make a tent again: a
     // second vertex on a short edge (under 2 epsilon) whose first one
