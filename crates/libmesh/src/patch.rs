@@ -1023,6 +1023,18 @@ fn cut_rounds(m: &Model, opts: Options, replay: bool) -> Result<(Model, Stats), 
         joins.extend(winged::weld::near_corner_joins(&model, &out, opts.eps));
         joins.sort_unstable();
         joins.dedup();
+        // A vertex asked to join several others joins the nearest (the
+        // first of its pairs is taken): property seed 9742, a triangle
+        // export with a wing, where a facade sliver's corner 1.17 epsilon
+        // from one end of its short edges and 1.73 from the other went to
+        // the farther by vertex order, across the other facade's strip
+        // lying on it, and the two patches overlapped.
+        joins.sort_by(|x, y| {
+            let d = |(a, b): (VertexId, VertexId)| model.pos(a).distance(model.pos(b));
+            x.0.cmp(&y.0)
+                .then(d(*x).total_cmp(&d(*y)))
+                .then(x.1.cmp(&y.1))
+        });
         if joins.is_empty() || round == 3 {
             return Ok((out, done));
         }
