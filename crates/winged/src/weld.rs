@@ -723,11 +723,16 @@ pub fn split_edges_in(mesh: &mut Mesh, eps: f64, region: Option<&Region>) -> Spl
 }
 
 /// The joins that remove T-vertices an edge of `out` (a patch mesh, or
-/// `model` itself) makes where it leaves a corner: a vertex of `model` more than epsilon and at most 2
-/// epsilon from the corner (the weld left the two apart) that lies within
-/// epsilon of the edge's interior joins the corner. Such pairs are rare,
-/// so this looks only at the edges leaving a vertex that has one.
+/// `model` itself) makes where it leaves a corner: a vertex of `model`
+/// more than epsilon and at most 2 epsilon from the corner (the weld left
+/// the two apart) that lies within epsilon of the edge's interior joins
+/// the corner. Such pairs are rare, so this looks only at the edges
+/// leaving a vertex that has one. (ugcut after meshing, with `out` its
+/// patches; ugclean's last step, on the model itself.)
 pub fn near_corner_joins(model: &Model, out: &Model, eps: f64) -> Vec<(VertexId, VertexId)> {
+    if !(eps.is_finite() && eps > 0.0) {
+        return Vec::new(); // no pair is more than 0 and at most 0 apart
+    }
     let used: Vec<VertexId> = {
         let mut v: Vec<VertexId> = model
             .faces
