@@ -881,3 +881,26 @@ fn a_point_just_beyond_epsilon_of_a_corner_joins_it() {
     assert!(out.contains("f wall (b n n2 m2);"), "{out}");
     assert_none(&checked_at(&out, "1e-3"), DEFECTS, &out);
 }
+
+/// A tent's tip whose nearer neighbour would sweep its face over a wall
+/// piece coplanar with it joins the other, the wall's corner
+/// (fixtures/clean/tent-tip-sweeping-over-a-coplanar-wall.ug, property
+/// seed 105079 at 4 decimals: an overlap of 8,400 epsilon squared).
+#[test]
+fn a_tents_tip_joins_the_neighbour_that_makes_no_overlap() {
+    let src = std::fs::read_to_string(fixture("clean/tent-tip-sweeping-over-a-coplanar-wall.ug"))
+        .unwrap();
+    for keep in [true, false] {
+        let args: &[&str] = if keep {
+            &["--keep-enclosed", "-e", "2e-4"]
+        } else {
+            &["-e", "2e-4"]
+        };
+        let out = run_ok("ugclean", args, Some(src.as_bytes()));
+        assert_none(&checked_at(&out, "2e-4"), DEFECTS, &out);
+        assert!(
+            out.contains("s76 wing1.4.iv426 wing2.3.iv280) facade;"),
+            "the tip joins the wall's corner:\n{out}"
+        );
+    }
+}

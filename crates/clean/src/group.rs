@@ -239,7 +239,8 @@ pub fn collapse_tents(model: Model, eps: f64) -> (Model, usize) {
     // a desk's ledge 1.87 epsilon long). Again, a few times at most.
     let mut joined = 0;
     for _ in 0..TENT_ROUNDS {
-        let (j, _) = winged::weld::collapse_tents(&mut mesh, eps);
+        let keeps = |mesh: &Mesh, v: VertexId, to: VertexId| join_keeps_pairs(mesh, v, to, eps);
+        let (j, _) = winged::weld::collapse_tents_with(&mut mesh, eps, &keeps);
         joined += j;
         if j == 0 {
             break;
@@ -254,6 +255,59 @@ pub fn collapse_tents(model: Model, eps: f64) -> (Model, usize) {
         out = settle_stated(out, eps);
     }
     (out, joined)
+}
+
+/// Whether moving `v` onto `to` leaves every pair of faces near `v` (those
+/// through it, and those sharing a vertex with them or through `to`)
+/// crossing or overlapping (as ugcheck judges) only where they did: a
+/// tent's tip joined to a neighbour sweeps the faces through it across a
+/// sliver, which may lie over a face coplanar with one of them.
+fn join_keeps_pairs(mesh: &Mesh, v: VertexId, to: VertexId, eps: f64) -> bool {
+    use geom::intersect::{FaceGeom, Relation, relate};
+    let at = mesh.pos(to);
+    let shape = |f: FaceId, moved: bool| -> Option<FaceGeom> {
+        FaceGeom::new(
+            mesh.face(f)
+                .contours
+                .iter()
+                .map(|c| {
+                    c.iter()
+                        .map(|&u| if moved && u == v { at } else { mesh.pos(u) })
+                        .collect()
+                })
+                .collect(),
+        )
+    };
+    let kind = |a: &FaceGeom, b: &FaceGeom| -> u8 {
+        match relate(a, b, eps) {
+            Relation::Intersect => 2,
+            Relation::Coplanar => u8::from(matches!(
+                check::coplanar_kind(a, b, eps),
+                Some(check::PairKind::Overlap(_))
+            )),
+            Relation::Disjoint | Relation::Touch => 0,
+        }
+    };
+    let through = mesh.vertex_faces(v);
+    let mut near: Vec<FaceId> = mesh.vertex_faces(to);
+    for &f in &through {
+        for &u in mesh.face(f).contours.iter().flatten() {
+            near.extend(mesh.vertex_faces(u));
+        }
+    }
+    near.sort_unstable();
+    near.dedup();
+    through.iter().all(|&f| {
+        let (Some(fa), Some(fb)) = (shape(f, true), shape(f, false)) else {
+            return true;
+        };
+        near.iter().filter(|&&g| g != f).all(|&g| {
+            let (Some(ga), Some(gb)) = (shape(g, true), shape(g, false)) else {
+                return true;
+            };
+            kind(&fa, &ga) <= kind(&fb, &gb)
+        })
+    })
 }
 
 /// Rounds of collapsing tents and putting points back into edges in

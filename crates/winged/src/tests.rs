@@ -1249,3 +1249,28 @@ fn tents_join_the_nearer_neighbour() {
     let (n, _) = crate::weld::collapse_tents(&mut m, 1.0);
     assert_eq!(n, 0);
 }
+
+/// With a test of the join ([`crate::weld::collapse_tents_with`]), the tip
+/// joins the nearer neighbour only if the test takes it, else the farther
+/// one if the test takes that; where it takes neither, as without.
+#[test]
+fn a_tents_tip_joins_the_neighbour_the_test_takes() {
+    let src = "v a 0 0 0; v b 1000 0 0; v u 600 0 0; v t 600.8 0.75 0; v w 601.7 0 0; \
+               v c 1000 1000 0; v d 0 1000 0; v x 600.9 500 0; \
+               v y 700 500 0; f A (a u t w b c d); f C (t x y w);";
+    let names = |m: &crate::Mesh, v: VertexId| m.model().vertices[v.idx()].name.clone();
+    // Refusing u: t joins w, the farther.
+    let mut m = mesh(src);
+    let not_u = |m: &crate::Mesh, _: VertexId, to: VertexId| names(m, to) != "u";
+    let (n, _) = crate::weld::collapse_tents_with(&mut m, 1.0, &not_u);
+    ok(&m);
+    assert_eq!(n, 1);
+    assert_eq!(contours(&m, f(&m, "A")), ["a u w b c d"]);
+    assert_eq!(contours(&m, f(&m, "C")), ["w x y"]);
+    // Refusing both: the nearer, u, as without a test.
+    let mut m = mesh(src);
+    let none = |_: &crate::Mesh, _: VertexId, _: VertexId| false;
+    let (n, _) = crate::weld::collapse_tents_with(&mut m, 1.0, &none);
+    assert_eq!(n, 1);
+    assert_eq!(contours(&m, f(&m, "C")), ["u x y w"]);
+}
