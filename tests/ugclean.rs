@@ -904,3 +904,17 @@ fn a_tents_tip_joins_the_neighbour_that_makes_no_overlap() {
         );
     }
 }
+
+/// Two tents whose tips are corners of one slab piece: each join alone
+/// keeps it planar, both in one pass bent it 1.1 epsilon
+/// (fixtures/clean/two-tents-on-one-slab-piece.ug, property seed 103186
+/// at 10 times epsilon). A face takes one join a pass.
+#[test]
+fn two_tents_on_one_face_join_one_at_a_time() {
+    let src = std::fs::read_to_string(fixture("clean/two-tents-on-one-slab-piece.ug")).unwrap();
+    let eps = "1.6157269999999999e-4";
+    for args in [&["--keep-enclosed", "-e", eps][..], &["-e", eps][..]] {
+        let out = run_ok("ugclean", args, Some(src.as_bytes()));
+        assert_none(&checked_at(&out, eps), DEFECTS, &out);
+    }
+}
