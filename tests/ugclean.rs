@@ -882,22 +882,27 @@ fn a_point_just_beyond_epsilon_of_a_corner_joins_it() {
     assert_none(&checked_at(&out, "1e-3"), DEFECTS, &out);
 }
 
+/// ugclean with and without `--keep-enclosed` on a fixture at epsilon
+/// `eps`, each output checked free of defects; the outputs.
+fn clean_both_ways(path: &str, eps: &str) -> Vec<String> {
+    let src = std::fs::read_to_string(fixture(path)).unwrap();
+    [&["--keep-enclosed", "-e", eps][..], &["-e", eps][..]]
+        .iter()
+        .map(|args| {
+            let out = run_ok("ugclean", args, Some(src.as_bytes()));
+            assert_none(&checked_at(&out, eps), DEFECTS, &out);
+            out
+        })
+        .collect()
+}
+
 /// A tent's tip whose nearer neighbour would sweep its face over a wall
 /// piece coplanar with it joins the other, the wall's corner
 /// (fixtures/clean/tent-tip-sweeping-over-a-coplanar-wall.ug, property
 /// seed 105079 at 4 decimals: an overlap of 8,400 epsilon squared).
 #[test]
 fn a_tents_tip_joins_the_neighbour_that_makes_no_overlap() {
-    let src = std::fs::read_to_string(fixture("clean/tent-tip-sweeping-over-a-coplanar-wall.ug"))
-        .unwrap();
-    for keep in [true, false] {
-        let args: &[&str] = if keep {
-            &["--keep-enclosed", "-e", "2e-4"]
-        } else {
-            &["-e", "2e-4"]
-        };
-        let out = run_ok("ugclean", args, Some(src.as_bytes()));
-        assert_none(&checked_at(&out, "2e-4"), DEFECTS, &out);
+    for out in clean_both_ways("clean/tent-tip-sweeping-over-a-coplanar-wall.ug", "2e-4") {
         assert!(
             out.contains("s76 wing1.4.iv426 wing2.3.iv280) facade;"),
             "the tip joins the wall's corner:\n{out}"
@@ -911,10 +916,8 @@ fn a_tents_tip_joins_the_neighbour_that_makes_no_overlap() {
 /// at 10 times epsilon). A face takes one join a pass.
 #[test]
 fn two_tents_on_one_face_join_one_at_a_time() {
-    let src = std::fs::read_to_string(fixture("clean/two-tents-on-one-slab-piece.ug")).unwrap();
-    let eps = "1.6157269999999999e-4";
-    for args in [&["--keep-enclosed", "-e", eps][..], &["-e", eps][..]] {
-        let out = run_ok("ugclean", args, Some(src.as_bytes()));
-        assert_none(&checked_at(&out, eps), DEFECTS, &out);
-    }
+    clean_both_ways(
+        "clean/two-tents-on-one-slab-piece.ug",
+        "1.6157269999999999e-4",
+    );
 }
