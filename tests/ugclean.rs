@@ -913,7 +913,7 @@ fn a_tents_tip_joins_the_neighbour_that_makes_no_overlap() {
 /// Two tents whose tips are corners of one slab piece: each join alone
 /// keeps it planar, both in one pass bent it 1.1 epsilon
 /// (fixtures/clean/two-tents-on-one-slab-piece.ug, property seed 103186
-/// at 10 times epsilon). A face takes one join a pass.
+/// at 10 times epsilon). The second join waits for the next pass.
 #[test]
 fn two_tents_on_one_face_join_one_at_a_time() {
     clean_both_ways(

@@ -428,11 +428,13 @@ fn collapse_tents_impl(
         }
         let mut joins: Vec<(VertexId, VertexId)> = Vec::new();
         let mut touched = vec![false; nv];
-        // One join a pass in any face: each is judged (bent, accepted) on
-        // the faces as they are (property seed 103186 at 10 times
-        // epsilon: two tips of one wing slab piece, joined in one pass,
-        // bent it 1.1 epsilon where each alone did not).
+        // A join that, with the joins of this pass before it, would bend
+        // a face they also move waits for the next pass, where it is
+        // judged on the faces as they are then (property seed 103186 at
+        // 10 times epsilon: two tips of one wing slab piece, joined in one
+        // pass, bent it 1.1 epsilon where each alone did not).
         let mut moved = vec![false; mesh.model().faces.len()];
+        let mut pending: FxHashMap<VertexId, DVec3> = FxHashMap::default();
         let faces: Vec<FaceId> = mesh.faces().filter(|&f| face_in(region, f)).collect();
         for f in faces {
             for c in &mesh.face(f).contours {
@@ -453,9 +455,6 @@ fn collapse_tents_impl(
                         continue;
                     }
                     let through = mesh.vertex_faces(v);
-                    if through.iter().any(|g| moved[g.idx()]) {
-                        continue; // the next pass
-                    }
                     let (du, dw) = (pv.distance(pu), pv.distance(pw));
                     let (near, far) = if du < dw || (du == dw && rank[u.idx()] < rank[w.idx()]) {
                         (u, w)
@@ -478,7 +477,13 @@ fn collapse_tents_impl(
                     } else {
                         near
                     };
+                    let shared: Vec<FaceId> =
+                        through.iter().copied().filter(|g| moved[g.idx()]).collect();
+                    if !shared.is_empty() && bends_with(mesh, &shared, &pending, v, to, eps) {
+                        continue; // the next pass
+                    }
                     joins.push((v, to));
+                    pending.insert(v, mesh.pos(to));
                     for x in [u, v, w] {
                         touched[x.idx()] = true;
                     }
@@ -519,6 +524,41 @@ fn bends(mesh: &Mesh, v: VertexId, to: VertexId, eps: f64) -> bool {
         let dev = |x: DVec3| geom::Plane::face_deviation(&pts(x)).map_or(0.0, |(d, _)| d);
         let after = dev(pt);
         after > eps && after > dev(pv)
+    })
+}
+
+/// Whether joining `v` to `to`, after the moves of `pending` (vertex →
+/// new place), leaves one of `faces` further than `eps` from its plane
+/// where the moves of `pending` alone did not.
+fn bends_with(
+    mesh: &Mesh,
+    faces: &[FaceId],
+    pending: &FxHashMap<VertexId, DVec3>,
+    v: VertexId,
+    to: VertexId,
+    eps: f64,
+) -> bool {
+    let pt = mesh.pos(to);
+    faces.iter().any(|&f| {
+        let face = mesh.face(f);
+        let dev = |with_v: bool| {
+            let pts: Vec<Vec<DVec3>> = face
+                .contours
+                .iter()
+                .map(|c| {
+                    c.iter()
+                        .map(|&u| match pending.get(&u) {
+                            _ if with_v && u == v => pt,
+                            Some(&p) => p,
+                            None => mesh.pos(u),
+                        })
+                        .collect()
+                })
+                .collect();
+            geom::Plane::face_deviation(&pts).map_or(0.0, |(d, _)| d)
+        };
+        let after = dev(true);
+        after > eps && after > dev(false)
     })
 }
 
