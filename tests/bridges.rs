@@ -596,15 +596,7 @@ fn cornell_box_obj_runs_through_the_whole_pipeline() {
         String::from_utf8_lossy(&check.stdout)
     );
     let r = report(&model);
-    for k in [
-        "nonplanar",
-        "tvertices",
-        "intersecting",
-        "overlapping",
-        "coincident",
-        "degenerate",
-        "inconsistent",
-    ] {
+    for k in ugkit::DEFECT_KEYS {
         assert_eq!(r[k].as_array().unwrap().len(), 0, "{k}");
     }
     assert_eq!(r["counts"]["emitters"], 1);

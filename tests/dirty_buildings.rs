@@ -201,15 +201,7 @@ fn an_export_rounded_to_its_precision_is_cleaned_at_that_precision() {
     assert!(text.starts_with("{ugkit epsilon 2e-4}"), "{text}");
     let r = check(&out);
     assert_eq!(r["epsilon"].as_f64(), Some(2e-4), "{}", r["epsilon"]);
-    for key in [
-        "nonplanar",
-        "tvertices",
-        "intersecting",
-        "overlapping",
-        "coincident",
-        "degenerate",
-        "inconsistent",
-    ] {
+    for key in ugkit::DEFECT_KEYS {
         assert_eq!(count(&r, key), 0, "{key}: {}", r[key]);
     }
     let faces = text.lines().filter(|l| l.starts_with("f ")).count();

@@ -548,15 +548,7 @@ fn a_tents_tip_joins_the_neighbour_that_keeps_faces_planar() {
 }
 
 /// Every defect category of ugcheck's JSON report.
-const DEFECTS: &[&str] = &[
-    "inconsistent",
-    "degenerate",
-    "nonplanar",
-    "tvertices",
-    "coincident",
-    "overlapping",
-    "intersecting",
-];
+const DEFECTS: &[&str] = &ugkit::DEFECT_KEYS;
 
 /// Asserts that ugcheck's report `r` of `out` has no finding in any of
 /// the categories `keys`.

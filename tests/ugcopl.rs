@@ -23,18 +23,7 @@ fn count(r: &serde_json::Value, key: &str) -> usize {
 }
 
 fn defects(r: &serde_json::Value) -> usize {
-    [
-        "nonplanar",
-        "tvertices",
-        "intersecting",
-        "overlapping",
-        "coincident",
-        "degenerate",
-        "inconsistent",
-    ]
-    .iter()
-    .map(|k| count(r, k))
-    .sum()
+    ugkit::DEFECT_KEYS.iter().map(|k| count(r, k)).sum()
 }
 
 fn areas(r: &serde_json::Value) -> Vec<(String, f64)> {

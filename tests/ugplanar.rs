@@ -23,15 +23,7 @@ fn warped_faces_are_tessellated_and_planar_ones_kept() {
     assert_eq!(before["nonplanar"].as_array().unwrap().len(), 2);
     let out = run_ok("ugplanar", &[path.to_str().unwrap()], None);
     let after = check(&out);
-    for key in [
-        "nonplanar",
-        "tvertices",
-        "intersecting",
-        "overlapping",
-        "coincident",
-        "degenerate",
-        "inconsistent",
-    ] {
+    for key in ugkit::DEFECT_KEYS {
         assert_eq!(
             after[key].as_array().unwrap().len(),
             0,

@@ -178,3 +178,15 @@ pub fn assert_one_degenerate(r: &serde_json::Value, why: &str) {
         "{degenerate:?}"
     );
 }
+
+/// The keys of ugcheck's JSON report that list defects (`ugcheck --deny
+/// defects`), in the report's order.
+pub const DEFECT_KEYS: [&str; 7] = [
+    "nonplanar",
+    "tvertices",
+    "intersecting",
+    "overlapping",
+    "coincident",
+    "degenerate",
+    "inconsistent",
+];

@@ -523,7 +523,7 @@ fn reshape_meets_more(
 /// they are coplanar and `shared` (if given) takes the kind of what they
 /// share, 0 otherwise. The checks of a move or reshape compare it before
 /// and after.
-fn meeting(
+pub(crate) fn meeting(
     a: &geom::intersect::FaceGeom,
     b: &geom::intersect::FaceGeom,
     eps: f64,

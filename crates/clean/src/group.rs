@@ -263,7 +263,7 @@ pub fn collapse_tents(model: Model, eps: f64) -> (Model, usize) {
 /// tent's tip joined to a neighbour sweeps the faces through it across a
 /// sliver, which may lie over a face coplanar with one of them.
 fn join_keeps_pairs(mesh: &Mesh, v: VertexId, to: VertexId, eps: f64) -> bool {
-    use geom::intersect::{FaceGeom, Relation, relate};
+    use geom::intersect::FaceGeom;
     let at = mesh.pos(to);
     let shape = |f: FaceId, moved: bool| -> Option<FaceGeom> {
         FaceGeom::new(
@@ -278,16 +278,7 @@ fn join_keeps_pairs(mesh: &Mesh, v: VertexId, to: VertexId, eps: f64) -> bool {
                 .collect(),
         )
     };
-    let kind = |a: &FaceGeom, b: &FaceGeom| -> u8 {
-        match relate(a, b, eps) {
-            Relation::Intersect => 2,
-            Relation::Coplanar => u8::from(matches!(
-                check::coplanar_kind(a, b, eps),
-                Some(check::PairKind::Overlap(_))
-            )),
-            Relation::Disjoint | Relation::Touch => 0,
-        }
-    };
+    // (The faces through `v` are among those sharing a vertex with them.)
     let through = mesh.vertex_faces(v);
     let mut near: Vec<FaceId> = mesh.vertex_faces(to);
     for &f in &through {
@@ -297,17 +288,22 @@ fn join_keeps_pairs(mesh: &Mesh, v: VertexId, to: VertexId, eps: f64) -> bool {
     }
     near.sort_unstable();
     near.dedup();
-    through.iter().all(|&f| {
-        let (Some(fa), Some(fb)) = (shape(f, true), shape(f, false)) else {
-            return true;
-        };
-        near.iter().filter(|&&g| g != f).all(|&g| {
-            let (Some(ga), Some(gb)) = (shape(g, true), shape(g, false)) else {
-                return true;
-            };
-            kind(&fa, &ga) <= kind(&fb, &gb)
+    // Each face before and after the move, once.
+    let shapes: Vec<(FaceId, FaceGeom, FaceGeom)> = near
+        .iter()
+        .filter_map(|&g| Some((g, shape(g, false)?, shape(g, true)?)))
+        .collect();
+    let overlap: fn(check::PairKind) -> bool = |k| matches!(k, check::PairKind::Overlap(_));
+    let kind = |a: &FaceGeom, b: &FaceGeom| crate::coincident::meeting(a, b, eps, Some(overlap));
+    shapes
+        .iter()
+        .filter(|(f, _, _)| through.contains(f))
+        .all(|(f, fb, fa)| {
+            shapes
+                .iter()
+                .filter(|(g, _, _)| g != f)
+                .all(|(_, gb, ga)| kind(fa, ga) <= kind(fb, gb))
         })
-    })
 }
 
 /// Rounds of collapsing tents and putting points back into edges in

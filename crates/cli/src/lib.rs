@@ -384,10 +384,7 @@ pub fn choose_epsilon(explicit: Option<f64>, m: &ug::Model) -> Epsilon {
             source: Source::Carried,
         };
     }
-    let relative = match m.bounds() {
-        Some((lo, hi)) if (hi - lo).length() > 0.0 => RELATIVE_EPSILON * (hi - lo).length(),
-        _ => 1e-9,
-    };
+    let relative = relative_epsilon(m);
     match precision_epsilon(m, relative) {
         Some(q) => Epsilon {
             value: q,
@@ -397,6 +394,15 @@ pub fn choose_epsilon(explicit: Option<f64>, m: &ug::Model) -> Epsilon {
             value: relative,
             source: Source::Relative,
         },
+    }
+}
+
+/// [`RELATIVE_EPSILON`] times the model's bounding-box diagonal (1e-9 for
+/// an empty or point model).
+pub fn relative_epsilon(m: &ug::Model) -> f64 {
+    match m.bounds() {
+        Some((lo, hi)) if (hi - lo).length() > 0.0 => RELATIVE_EPSILON * (hi - lo).length(),
+        _ => 1e-9,
     }
 }
 
@@ -546,15 +552,10 @@ mod tests {
     #[test]
     fn the_precision_of_rounded_turned_faces_is_the_epsilon() {
         let m = model(ROUNDED);
-        let relative = epsilon(
-            None,
-            &model("v a 1.1147 2.3457 -0.3184; v b 4.12 4.5975 0.7021;"),
-        );
         let e = choose_epsilon(None, &m);
         // Bent by more than the relative epsilon, so the rounding's.
-        let (bend, _) =
-            geom::Plane::face_deviation(&[m.top_vertices().map(|v| m.pos(v)).collect()]).unwrap();
-        assert!(bend > relative && bend < 2e-4, "{bend}");
+        let (bend, _) = geom::Plane::face_deviation(&[m_face(&m, 0)]).unwrap();
+        assert!(bend > relative_epsilon(&m) && bend < 2e-4, "{bend}");
         assert_eq!(e.source, Source::Precision);
         assert_eq!(e.value, 2e-4);
         // `-e` wins; a carried comment is used as it is.
@@ -580,18 +581,13 @@ mod tests {
              v c 3.301 5.977 -0.201; v d -1.009 4.633 0.133; f q (a b c d);",
         );
         let (bend, _) = geom::Plane::face_deviation(&[m_face(&mm, 0)]).unwrap();
-        assert!(bend > epsilon_relative(&mm) && bend < 2e-3, "{bend}");
+        assert!(bend > relative_epsilon(&mm) && bend < 2e-3, "{bend}");
         assert_eq!(choose_epsilon(None, &mm).source, Source::Precision);
         assert_eq!(choose_epsilon(None, &mm).value, 2e-3);
     }
 
     fn m_face(m: &ug::Model, k: usize) -> Vec<geom::DVec3> {
         m.faces[k].contours[0].iter().map(|&v| m.pos(v)).collect()
-    }
-
-    fn epsilon_relative(m: &ug::Model) -> f64 {
-        let (lo, hi) = m.bounds().unwrap();
-        RELATIVE_EPSILON * (hi - lo).length()
     }
 
     #[test]

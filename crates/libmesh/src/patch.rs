@@ -1021,8 +1021,6 @@ fn cut_rounds(m: &Model, opts: Options, replay: bool) -> Result<(Model, Stats), 
         // (a T-vertex): it joins the corner (property seed 3327, a ramp's
         // needle piece 1.02 epsilon wide at a floor piece's corner).
         joins.extend(winged::weld::near_corner_joins(&model, &out, opts.eps));
-        joins.sort_unstable();
-        joins.dedup();
         // A vertex asked to join several others joins the nearest (the
         // first of its pairs is taken): property seed 9742, a triangle
         // export with a wing, where a facade sliver's corner 1.17 epsilon
@@ -1035,6 +1033,7 @@ fn cut_rounds(m: &Model, opts: Options, replay: bool) -> Result<(Model, Stats), 
                 .then(d(*x).total_cmp(&d(*y)))
                 .then(x.1.cmp(&y.1))
         });
+        joins.dedup();
         if joins.is_empty() || round == 3 {
             return Ok((out, done));
         }

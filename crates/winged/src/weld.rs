@@ -508,23 +508,14 @@ fn collapse_tents_impl(
 /// `v` further than `eps` from its plane (as `ugcheck` measures it) where
 /// it was not before.
 fn bends(mesh: &Mesh, v: VertexId, to: VertexId, eps: f64) -> bool {
-    let (pv, pt) = (mesh.pos(v), mesh.pos(to));
-    mesh.vertex_faces(v).into_iter().any(|f| {
-        let face = mesh.face(f);
-        let pts = |x: DVec3| -> Vec<Vec<DVec3>> {
-            face.contours
-                .iter()
-                .map(|c| {
-                    c.iter()
-                        .map(|&u| if u == v { x } else { mesh.pos(u) })
-                        .collect()
-                })
-                .collect()
-        };
-        let dev = |x: DVec3| geom::Plane::face_deviation(&pts(x)).map_or(0.0, |(d, _)| d);
-        let after = dev(pt);
-        after > eps && after > dev(pv)
-    })
+    bends_with(
+        mesh,
+        &mesh.vertex_faces(v),
+        &FxHashMap::default(),
+        v,
+        to,
+        eps,
+    )
 }
 
 /// Whether joining `v` to `to`, after the moves of `pending` (vertex →
