@@ -574,6 +574,37 @@ fn feet_and_thin(m: &Model, eps: f64, planes: &FacePlanes) -> (Feet, Thin) {
         v.sort_unstable();
         v.dedup();
     }
+    // And the two sides of a needle corner: a face's edges leaving one
+    // vertex within 5° of each other (they share that end, so the look
+    // above passes them by). Where a needle triangle is between 1 and
+    // [`NARROW`] epsilon wide, a foot on one side needs its partner on the
+    // other (property seed 95007 rounded to 1 mm: a round column's facet
+    // halved into triangles 2.8 m long and 2.7 cm wide at one end; a
+    // pipe's hole in the other half put feet 2.75 epsilon apart on the
+    // long diagonal where this one was 2.7 epsilon wide, and the point
+    // across their jog made a triangle 0.75 epsilon wide and a T-vertex).
+    let parallel = 5f64.to_radians().cos();
+    for f in m.top_faces() {
+        for c in &m.faces[f.idx()].contours {
+            let n = c.len();
+            for i in 0..n {
+                let (u, v, w) = (c[(i + n - 1) % n], c[i], c[(i + 1) % n]);
+                if u == v || v == w || u == w {
+                    continue;
+                }
+                let x = m.pos(v);
+                let (a, b) = (
+                    (m.pos(u) - x).normalize_or_zero(),
+                    (m.pos(w) - x).normalize_or_zero(),
+                );
+                if a.dot(b) >= parallel {
+                    let (e, g) = (key(u, v), key(v, w));
+                    strips.push((e, g, f));
+                    strips.push((g, e, f));
+                }
+            }
+        }
+    }
     strips.sort_unstable();
     strips.dedup();
     carry_across_strips(m, eps, planes, &strips, &mut out);
@@ -1788,7 +1819,7 @@ fn mesh_face(
         .with_max_additional_vertices(20 * before + 1000);
     if full {
         cdt.refine(params);
-        drop_crowded(&mut cdt, before, eps);
+        drop_crowded(&mut cdt, before, eps, false);
     }
     let in_cell = |p: DVec2| {
         let i = ((p.x - lo.x) / du).floor();
@@ -1888,9 +1919,11 @@ fn mesh_face(
                     .filter(|(a, b)| a.idx() < known && b.idx() < known),
             );
             if !jogs.is_empty() {
+                let first = cdt.num_vertices();
                 for q in jogs {
                     cdt.insert(Point2::new(q.x, q.y)).ok()?;
                 }
+                drop_crowded(&mut cdt, first, eps, true);
                 continue;
             }
         }
@@ -2154,8 +2187,10 @@ fn cell_ok(
     true
 }
 
-/// Removes the points the refinement added (those from index `first` on)
-/// that lie within `eps` of another vertex, later ones first: an edge
+/// Removes the points the refinement added, or those put across jogs
+/// (those from index `first` on), that lie within `eps` of another vertex
+/// (with `apexes`, or of the far side of one of their triangles), later
+/// ones first: an edge
 /// between them would have no length. (The 100,000-face building exported
 /// as triangles, the user's pipeline: a floor with hundreds of holes got
 /// three refinement points within 0.4 epsilon of each other, and patches
@@ -2163,7 +2198,12 @@ fn cell_ok(
 /// vertex is one of its neighbours, so only those are looked at; removal
 /// swaps the last vertex into the removed one's place, so the boundary's
 /// handles (before `first`) stay valid.
-fn drop_crowded(cdt: &mut ConstrainedDelaunayTriangulation<Point2<f64>>, first: usize, eps: f64) {
+fn drop_crowded(
+    cdt: &mut ConstrainedDelaunayTriangulation<Point2<f64>>,
+    first: usize,
+    eps: f64,
+    apexes: bool,
+) {
     use spade::handles::FixedVertexHandle;
     if eps.is_nan() || eps <= 0.0 {
         return;
@@ -2178,7 +2218,36 @@ fn drop_crowded(cdt: &mut ConstrainedDelaunayTriangulation<Point2<f64>>, first: 
             let q = e.to().position();
             (q.x - p.x).hypot(q.y - p.y) <= eps
         });
-        if crowded {
+        // With `apexes` (the points across jogs, `jog_points`), also one
+        // within `eps` of the far side of one of its triangles, its foot
+        // inside that side: a sliver with it as apex that `remove_slivers`
+        // may find no way to mend. (Property seed 95021 rounded to 1 mm: a
+        // round column's facet 13 epsilon wide, beside a pipe's hole in
+        // the next facet, got five points across the jogs on their shared
+        // edge; one lay 0.02 epsilon off the line through two others 7.6
+        // and 37 mm away. Neither a flip nor a point inside gave triangles
+        // wider than epsilon there, and ugcut wrote a triangle of no area
+        // and a T-vertex.)
+        let apex = || {
+            let at = DVec2::new(p.x, p.y);
+            v.out_edges().any(|e| {
+                let Some(face) = e.face().as_inner() else {
+                    return false;
+                };
+                let vs = face.vertices();
+                let k = vs.iter().position(|w| w.fix() == h).unwrap_or(0);
+                let (a, b) = (vs[(k + 1) % 3].position(), vs[(k + 2) % 3].position());
+                let (a, b) = (DVec2::new(a.x, a.y), DVec2::new(b.x, b.y));
+                let d = b - a;
+                let l2 = d.length_squared();
+                if l2 <= 0.0 {
+                    return false;
+                }
+                let t = (at - a).dot(d) / l2;
+                (0.0..=1.0).contains(&t) && (at - a).perp_dot(d).abs() / l2.sqrt() <= eps
+            })
+        };
+        if crowded || (apexes && apex()) {
             Triangulation::remove(cdt, h);
         }
     }
