@@ -289,6 +289,10 @@ pub fn enclosed(m: &Model, eps: f64) -> Vec<bool> {
                 id != k as u32 && normals[id as usize].dot(n) > 0.0
             }) {
                 if h.t < 2.0 * MIN_LIFT * eps {
+                    // A back this near in front: the point lies inside
+                    // that face's solid, as one ray that met a back.
+                    seen.rays += 1;
+                    seen.backs += 1;
                     continue;
                 }
                 up = 0.5 * h.t;
