@@ -752,6 +752,21 @@ fn feet_are_carried_across_a_needle_triangle() {
     cuts_soundly("cut/needle-half-of-a-column-facet.ug", "2e-3", 1e-3);
 }
 
+/// A facade strip 15 epsilon wide whose long side is divided near one end
+/// at 2.7 to 4.3 epsilon (fixtures/cut/facade-strip-divided-near-an-end.ug,
+/// property seed 95000 at 270 times the default epsilon): a refinement
+/// point lay 0.69 epsilon from the far side of one of its triangles, and
+/// ugcut wrote two triangles narrower than epsilon and 2 T-vertices. Such
+/// a point is left out now, as the points across jogs are.
+#[test]
+fn a_refinement_point_near_the_far_side_is_left_out() {
+    cuts_soundly(
+        "cut/facade-strip-divided-near-an-end.ug",
+        "2.52543636e-3",
+        1e-9,
+    );
+}
+
 /// A pyramid's apex resting on a ceiling, 0.3 epsilon into it
 /// (fixtures/cut/cone-apex-on-a-ceiling.ug; property seed 9033, a globe's
 /// pole on a ceiling): a touch, nothing for ugisect to cut, and at -l 1

@@ -1819,7 +1819,7 @@ fn mesh_face(
         .with_max_additional_vertices(20 * before + 1000);
     if full {
         cdt.refine(params);
-        drop_crowded(&mut cdt, before, eps, false);
+        drop_crowded(&mut cdt, before, eps);
     }
     let in_cell = |p: DVec2| {
         let i = ((p.x - lo.x) / du).floor();
@@ -1923,7 +1923,7 @@ fn mesh_face(
                 for q in jogs {
                     cdt.insert(Point2::new(q.x, q.y)).ok()?;
                 }
-                drop_crowded(&mut cdt, first, eps, true);
+                drop_crowded(&mut cdt, first, eps);
                 continue;
             }
         }
@@ -2189,8 +2189,7 @@ fn cell_ok(
 
 /// Removes the points the refinement added, or those put across jogs
 /// (those from index `first` on), that lie within `eps` of another vertex
-/// (with `apexes`, or of the far side of one of their triangles), later
-/// ones first: an edge
+/// or of the far side of one of their triangles, later ones first: an edge
 /// between them would have no length. (The 100,000-face building exported
 /// as triangles, the user's pipeline: a floor with hundreds of holes got
 /// three refinement points within 0.4 epsilon of each other, and patches
@@ -2198,12 +2197,7 @@ fn cell_ok(
 /// vertex is one of its neighbours, so only those are looked at; removal
 /// swaps the last vertex into the removed one's place, so the boundary's
 /// handles (before `first`) stay valid.
-fn drop_crowded(
-    cdt: &mut ConstrainedDelaunayTriangulation<Point2<f64>>,
-    first: usize,
-    eps: f64,
-    apexes: bool,
-) {
+fn drop_crowded(cdt: &mut ConstrainedDelaunayTriangulation<Point2<f64>>, first: usize, eps: f64) {
     use spade::handles::FixedVertexHandle;
     if eps.is_nan() || eps <= 0.0 {
         return;
@@ -2218,16 +2212,17 @@ fn drop_crowded(
             let q = e.to().position();
             (q.x - p.x).hypot(q.y - p.y) <= eps
         });
-        // With `apexes` (the points across jogs, `jog_points`), also one
-        // within `eps` of the far side of one of its triangles, its foot
-        // inside that side: a sliver with it as apex that `remove_slivers`
-        // may find no way to mend. (Property seed 95021 rounded to 1 mm: a
-        // round column's facet 13 epsilon wide, beside a pipe's hole in
-        // the next facet, got five points across the jogs on their shared
-        // edge; one lay 0.02 epsilon off the line through two others 7.6
-        // and 37 mm away. Neither a flip nor a point inside gave triangles
-        // wider than epsilon there, and ugcut wrote a triangle of no area
-        // and a T-vertex.)
+        // … or within `eps` of the far side of one of its triangles, its
+        // foot inside that side: a sliver with it as apex that
+        // `remove_slivers` may find no way to mend. (Property seed 95021
+        // rounded to 1 mm: a round column's facet 13 epsilon wide, beside
+        // a pipe's hole in the next facet, got five points across the
+        // jogs on their shared edge; one lay 0.02 epsilon off the line
+        // through two others 7.6 and 37 mm away. Seed 95000 at 270 times
+        // the default: a refinement point 0.69 epsilon from the far side
+        // of its triangle in a facade strip divided near one end. Neither
+        // a flip nor a point inside gave triangles wider than epsilon, and
+        // ugcut wrote triangles narrower than epsilon and T-vertices.)
         let apex = || {
             let at = DVec2::new(p.x, p.y);
             v.out_edges().any(|e| {
@@ -2247,7 +2242,7 @@ fn drop_crowded(
                 (0.0..=1.0).contains(&t) && (at - a).perp_dot(d).abs() / l2.sqrt() <= eps
             })
         };
-        if crowded || (apexes && apex()) {
+        if crowded || apex() {
             Triangulation::remove(cdt, h);
         }
     }
