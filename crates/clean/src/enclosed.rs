@@ -11,8 +11,8 @@
 //! **The test.** From points just in front of every face (the centroids of
 //! its largest triangles, slivers under `20·eps` wide left out, `10·eps`
 //! off its plane, or half-way to the back of a face nearer than that; a
-//! face whose every point lies within `4·eps` of such a back, and which
-//! that back covers whole, counts those points as rays that met it) rays
+//! point within `4·eps` of such a back counts as a ray that met it where
+//! faces cover its face whole) rays
 //! go out over the
 //! front hemisphere (a fixed Fibonacci set). Each ray meets a face's front,
 //! a face's back, or nothing. Faces joined by front-to-front sight form
@@ -289,9 +289,8 @@ pub fn enclosed(m: &Model, eps: f64) -> Vec<bool> {
             // at all, it left faces with no ray, and they stayed (a box's
             // side 8.5 epsilon behind a step's, inside the step and the
             // floor). Half-way less than `MIN_LIFT` epsilon, it is not
-            // used; the face is judged by its other points, and one with
-            // none left is judged by whether the back covers it whole
-            // (below). (Through a front the lift goes on, as before: a
+            // used; where faces cover the face whole it counts as a ray
+            // that met a back (below). (Through a front the lift goes on, as before: a
             // wall's bottom standing on a floor lifts through the floor
             // into the slab.)
             let mut up = lift;

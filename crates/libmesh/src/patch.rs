@@ -502,10 +502,39 @@ fn feet_and_thin(m: &Model, eps: f64, planes: &FacePlanes) -> (Feet, Thin) {
     let mut strips: Vec<Strip> = Vec::new();
     let reach = THIN * eps;
     let key = |a: VertexId, b: VertexId| if a < b { (a, b) } else { (b, a) };
+    let parallel = 5f64.to_radians().cos();
     for f in m.top_faces() {
         let face = &m.faces[f.idx()];
         let fe = FaceEdges::new(m, face, reach);
         let edges = &fe.edges;
+        // The two sides of a needle corner are a strip too: a face's edges
+        // leaving one vertex within 5° of each other (they share that end,
+        // so the look below passes them by). Where a needle triangle is
+        // between 1 and [`NARROW`] epsilon wide, a foot on one side needs
+        // its partner on the other (property seed 95007 rounded to 1 mm: a round column's facet
+        // halved into triangles 2.8 m long and 2.7 cm wide at one end; a
+        // pipe's hole in the other half put feet 2.75 epsilon apart on the
+        // long diagonal where this one was 2.7 epsilon wide, and the point
+        // across their jog made a triangle 0.75 epsilon wide and a T-vertex).
+        for c in &face.contours {
+            let n = c.len();
+            for i in 0..n {
+                let (u, v, w) = (c[(i + n - 1) % n], c[i], c[(i + 1) % n]);
+                if u == v || v == w || u == w {
+                    continue;
+                }
+                let x = m.pos(v);
+                let (a, b) = (
+                    (m.pos(u) - x).normalize_or_zero(),
+                    (m.pos(w) - x).normalize_or_zero(),
+                );
+                if a.dot(b) >= parallel {
+                    let (e, g) = (key(u, v), key(v, w));
+                    strips.push((e, g, f));
+                    strips.push((g, e, f));
+                }
+            }
+        }
         // The face's edges at each vertex, by vertex.
         let mut at: Vec<(VertexId, (VertexId, VertexId))> = edges
             .iter()
@@ -573,37 +602,6 @@ fn feet_and_thin(m: &Model, eps: f64, planes: &FacePlanes) -> (Feet, Thin) {
     for v in thin.values_mut() {
         v.sort_unstable();
         v.dedup();
-    }
-    // And the two sides of a needle corner: a face's edges leaving one
-    // vertex within 5° of each other (they share that end, so the look
-    // above passes them by). Where a needle triangle is between 1 and
-    // [`NARROW`] epsilon wide, a foot on one side needs its partner on the
-    // other (property seed 95007 rounded to 1 mm: a round column's facet
-    // halved into triangles 2.8 m long and 2.7 cm wide at one end; a
-    // pipe's hole in the other half put feet 2.75 epsilon apart on the
-    // long diagonal where this one was 2.7 epsilon wide, and the point
-    // across their jog made a triangle 0.75 epsilon wide and a T-vertex).
-    let parallel = 5f64.to_radians().cos();
-    for f in m.top_faces() {
-        for c in &m.faces[f.idx()].contours {
-            let n = c.len();
-            for i in 0..n {
-                let (u, v, w) = (c[(i + n - 1) % n], c[i], c[(i + 1) % n]);
-                if u == v || v == w || u == w {
-                    continue;
-                }
-                let x = m.pos(v);
-                let (a, b) = (
-                    (m.pos(u) - x).normalize_or_zero(),
-                    (m.pos(w) - x).normalize_or_zero(),
-                );
-                if a.dot(b) >= parallel {
-                    let (e, g) = (key(u, v), key(v, w));
-                    strips.push((e, g, f));
-                    strips.push((g, e, f));
-                }
-            }
-        }
     }
     strips.sort_unstable();
     strips.dedup();
@@ -2224,22 +2222,15 @@ fn drop_crowded(cdt: &mut ConstrainedDelaunayTriangulation<Point2<f64>>, first: 
         // a flip nor a point inside gave triangles wider than epsilon, and
         // ugcut wrote triangles narrower than epsilon and T-vertices.)
         let apex = || {
-            let at = DVec2::new(p.x, p.y);
+            let pos = |w: Point2<f64>| DVec3::new(w.x, w.y, 0.0);
+            let at = pos(p);
             v.out_edges().any(|e| {
-                let Some(face) = e.face().as_inner() else {
-                    return false;
-                };
-                let vs = face.vertices();
-                let k = vs.iter().position(|w| w.fix() == h).unwrap_or(0);
-                let (a, b) = (vs[(k + 1) % 3].position(), vs[(k + 2) % 3].position());
-                let (a, b) = (DVec2::new(a.x, a.y), DVec2::new(b.x, b.y));
-                let d = b - a;
-                let l2 = d.length_squared();
-                if l2 <= 0.0 {
-                    return false;
+                e.face().as_inner().is_some() && {
+                    let (a, b) = (pos(e.to().position()), pos(e.next().to().position()));
+                    // (A foot outside the side puts the point within
+                    // `eps` of an end, a neighbour: crowded already.)
+                    geom::point_segment_distance(at, a, b).0 <= eps
                 }
-                let t = (at - a).dot(d) / l2;
-                (0.0..=1.0).contains(&t) && (at - a).perp_dot(d).abs() / l2.sqrt() <= eps
             })
         };
         if crowded || apex() {
