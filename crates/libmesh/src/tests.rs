@@ -727,6 +727,54 @@ fn split_reports_all_new_vertices_in_id_order() {
     m.validate().unwrap();
 }
 
+/// `write_ug` over more patches and vertices than one parallel job takes
+/// (8,192): a 100 × 100 grid of tiles `tI_J`, two of them named `t0_0.2`
+/// and `t0_0.3` instead, which the pieces of `t0_0` skip; every third
+/// tile split, then every third of the others.
+#[test]
+fn streamed_output_is_the_written_model_across_jobs() {
+    use std::fmt::Write as _;
+    let n = 100;
+    let mut src = String::from("c_rgb grey 0.5 0.5 0.5;\n");
+    for j in 0..=n {
+        for i in 0..=n {
+            let _ = writeln!(src, "v p{i}_{j} {i} {j} 0;");
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let name = match (i, j) {
+                (5, 0) => "t0_0.2".to_string(),
+                (7, 3) => "t0_0.3".to_string(),
+                _ => format!("t{i}_{j}"),
+            };
+            let _ = writeln!(
+                src,
+                "f {name} (p{i}_{j} p{}_{j} p{}_{} p{i}_{}) grey;",
+                i + 1,
+                i + 1,
+                j + 1,
+                j + 1
+            );
+        }
+    }
+    let (src, mut m) = mesh(&src);
+    for round in 0..2 {
+        let leaves: Vec<ElemId> = m.leaves().collect();
+        for e in leaves {
+            if m.elem_patch(e).0 % 3 == round {
+                m.split(e);
+            }
+        }
+    }
+    let mut out = Vec::new();
+    m.write_ug(&src, &mut out).unwrap();
+    let want = ug::write_string(&m.to_model(&src));
+    // `t0_0`'s four pieces skip the input's names.
+    assert!(want.contains("f t0_0.1 (") && want.contains("f t0_0.5 ("));
+    assert_eq!(String::from_utf8(out).unwrap(), want);
+}
+
 /// `write_ug` streams exactly the bytes of writing `to_model`, including
 /// derived names that must skip input names (vertex `a.2`, face `floor.1`)
 /// and patches that share a name.

@@ -15,22 +15,76 @@
 //! which is what skipping the names already taken does).
 
 use std::io::{self, Write};
+use std::ops::Range;
 
+use rayon::prelude::*;
 use rustc_hash::{FxHashMap, FxHashSet};
 use ug::{Item, MaterialId, Model};
 
-use crate::{Mesh, NONE, VertId};
+use crate::{Mesh, NONE, PatchId, VertId};
+
+/// Items (lines) formatted by one parallel job of [`write_in_parallel`].
+const JOB: usize = 8192;
+/// Jobs formatted before their text is written (so that at most this many
+/// jobs' text is held at once: a few megabytes).
+const JOBS: usize = 16;
+
+/// Writes to `out` the text that `fmt(range, buf)` appends for the items
+/// `0..n`, in order: the items are formatted [`JOB`] to a job on rayon's
+/// threads, a batch of [`JOBS`] jobs at a time, and each batch is written
+/// by the calling thread while the next is formatted. The bytes are those
+/// of one `fmt(0..n, buf)` when `fmt` formats each item on its own (as the
+/// writers here do: the text of an item depends on the item only).
+pub fn write_in_parallel(
+    out: &mut dyn Write,
+    n: usize,
+    fmt: impl Fn(Range<usize>, &mut Vec<u8>) + Sync,
+) -> io::Result<()> {
+    // The longest job's text so far: the next jobs' buffers start there.
+    let longest = std::sync::atomic::AtomicUsize::new(0);
+    let batch = |start: usize, end: usize| -> Vec<Vec<u8>> {
+        let firsts: Vec<usize> = (start..end).step_by(JOB).collect();
+        firsts
+            .into_par_iter()
+            .map(|a| {
+                let mut buf =
+                    Vec::with_capacity(longest.load(std::sync::atomic::Ordering::Relaxed));
+                fmt(a..end.min(a + JOB), &mut buf);
+                longest.fetch_max(buf.len(), std::sync::atomic::Ordering::Relaxed);
+                buf
+            })
+            .collect()
+    };
+    let mut pending: Vec<Vec<u8>> = Vec::new();
+    let mut start = 0;
+    loop {
+        let end = n.min(start + JOB * JOBS);
+        let mut next = Vec::new();
+        rayon::in_place_scope(|s| {
+            if start < n {
+                s.spawn(|_| next = batch(start, end));
+            }
+            pending.iter().try_for_each(|t| out.write_all(t))
+        })?;
+        if start >= n {
+            return Ok(());
+        }
+        pending = next;
+        start = end;
+    }
+}
 
 /// What [`Mesh::write_ug_with`] writes besides the mesh: statements just
-/// before the first vertex, and a colour on each vertex.
-pub trait VertexColours {
+/// before the first vertex, and a colour on each vertex. (Shared by the
+/// threads that format the vertices.)
+pub trait VertexColours: Sync {
     /// Writes whole statements (each ending with a newline) that go after the
     /// input's kept statements and before the first vertex.
     fn write_before_vertices(&mut self, out: &mut dyn Write) -> io::Result<()>;
 
     /// Appends the name of vertex `v`'s colour material to `line` and returns
     /// true, or returns false to keep the input vertex's colour.
-    fn colour_name(&mut self, v: VertId, line: &mut Vec<u8>) -> bool;
+    fn colour_name(&self, v: VertId, line: &mut Vec<u8>) -> bool;
 }
 
 /// No extra statements; input vertices keep their colours.
@@ -40,7 +94,7 @@ impl VertexColours for InputColours {
     fn write_before_vertices(&mut self, _: &mut dyn Write) -> io::Result<()> {
         Ok(())
     }
-    fn colour_name(&mut self, _: VertId, _: &mut Vec<u8>) -> bool {
+    fn colour_name(&self, _: VertId, _: &mut Vec<u8>) -> bool {
         false
     }
 }
@@ -239,49 +293,41 @@ impl Mesh {
             return out.flush();
         };
         let mat_name = |m: MaterialId| src.materials[m.idx()].name.as_bytes();
-        let mut ryu = ryu::Buffer::new();
-        let mut line: Vec<u8> = Vec::with_capacity(256);
-        let mut scratch = Vec::new();
+        let colours: &dyn VertexColours = colours;
 
         // Vertices.
-        for v in 0..self.pos.len() {
-            line.clear();
-            line.extend_from_slice(b"v ");
-            names.spell(v as u32, &mut line, &mut scratch);
-            for x in self.pos[v].to_array() {
-                line.push(b' ');
-                ug::push_f64(&mut line, x, &mut ryu);
-            }
-            let mark = line.len();
-            line.push(b' ');
-            if !colours.colour_name(VertId(v as u32), &mut line) {
-                line.truncate(mark);
-                let [a, b] = self.vparent[v];
-                if b == NONE
-                    && let Some(c) = src.vertices.get(a as usize).and_then(|x| x.color)
-                {
+        write_in_parallel(&mut out, self.pos.len(), |range, line| {
+            let mut ryu = ryu::Buffer::new();
+            let mut scratch = Vec::new();
+            for v in range {
+                line.extend_from_slice(b"v ");
+                names.spell(v as u32, line, &mut scratch);
+                for x in self.pos[v].to_array() {
                     line.push(b' ');
-                    line.extend_from_slice(mat_name(c));
+                    ug::push_f64(line, x, &mut ryu);
                 }
+                let mark = line.len();
+                line.push(b' ');
+                if !colours.colour_name(VertId(v as u32), line) {
+                    line.truncate(mark);
+                    let [a, b] = self.vparent[v];
+                    if b == NONE
+                        && let Some(c) = src.vertices.get(a as usize).and_then(|x| x.color)
+                    {
+                        line.push(b' ');
+                        line.extend_from_slice(mat_name(c));
+                    }
+                }
+                line.extend_from_slice(b";\n");
             }
-            line.extend_from_slice(b";\n");
-            out.write_all(&line)?;
-        }
+        })?;
 
-        // Faces.
-        let taken: FxHashSet<&str> = src
-            .faces
-            .iter()
-            .filter_map(|f| f.name.as_deref())
-            .chain(src.wires.iter().filter_map(|w| w.name.as_deref()))
-            .collect();
-        let mut next_k: FxHashMap<&str, u32> = FxHashMap::default();
-        let mut pieces: Vec<VertId> = Vec::new();
-        let mut ends: Vec<usize> = Vec::new();
-        for p in self.patches() {
-            let face = src.faces.get(self.patch_face(p).idx());
-            let name = face.and_then(|f| f.name.as_deref());
-            let material = self.patch_material(p);
+        // Faces: a patch's pieces are `NAME.k` (or `NAME` when the patch
+        // is one piece), `k` counting on over the patches of one name and
+        // skipping the names the input's faces and wires take. The pieces
+        // per patch first, then each named patch's first `k` (in patch
+        // order), then the lines, formatted in parallel.
+        let pieces_of = |p: PatchId, pieces: &mut Vec<VertId>, ends: &mut Vec<usize>| {
             pieces.clear();
             ends.clear();
             for e in self.patch_leaves(p) {
@@ -290,47 +336,125 @@ impl Mesh {
                     ends.push(pieces.len());
                 });
             }
-            let whole = ends.len() == 1;
-            let mut start = 0;
-            for &end in &ends {
-                line.clear();
-                line.push(b'f');
-                if let Some(n) = name {
-                    line.push(b' ');
-                    line.extend_from_slice(n.as_bytes());
-                    if !whole {
-                        let k = next_k.entry(n).or_insert(0);
-                        let mut cand = String::new();
-                        loop {
-                            *k += 1;
-                            cand.clear();
-                            use std::fmt::Write as _;
-                            let _ = write!(cand, "{n}.{k}");
-                            if !taken.contains(cand.as_str()) {
-                                break;
-                            }
-                        }
-                        line.push(b'.');
-                        push_u64(&mut line, *k as u64);
-                    }
+        };
+        let np = self.patches.len();
+        let counts: Vec<u32> = (0..np)
+            .into_par_iter()
+            .map_init(
+                || (Vec::new(), Vec::new()),
+                |(pieces, ends), p| {
+                    pieces_of(PatchId(p as u32), pieces, ends);
+                    ends.len() as u32
+                },
+            )
+            .collect();
+        // The input's face and wire names `PREFIX.k` (k as written: no
+        // leading zero), as (PREFIX, k): the derived names they take.
+        let taken: FxHashSet<(&str, u32)> = src
+            .faces
+            .iter()
+            .filter_map(|f| f.name.as_deref())
+            .chain(src.wires.iter().filter_map(|w| w.name.as_deref()))
+            .filter_map(|n| {
+                let (prefix, digits) = n.rsplit_once('.')?;
+                let canonical = !digits.is_empty()
+                    && digits.bytes().all(|b| b.is_ascii_digit())
+                    && (digits == "0" || !digits.starts_with('0'));
+                canonical
+                    .then(|| digits.parse::<u32>().ok())
+                    .flatten()
+                    .map(|k| (prefix, k))
+            })
+            .collect();
+        let next = |n: &str, k: &mut u32| loop {
+            *k += 1;
+            if !taken.contains(&(n, *k)) {
+                break *k;
+            }
+        };
+        let name_of = |p: PatchId| {
+            src.faces
+                .get(self.patch_face(p).idx())
+                .and_then(|f| f.name.as_deref())
+        };
+        // Per patch, its name's count before its first piece.
+        let mut first_k = vec![0u32; np];
+        let mut next_k: FxHashMap<&str, u32> = FxHashMap::default();
+        for p in 0..np {
+            if counts[p] < 2 {
+                continue;
+            }
+            if let Some(n) = name_of(PatchId(p as u32)) {
+                let k = next_k.entry(n).or_insert(0);
+                first_k[p] = *k;
+                for _ in 0..counts[p] {
+                    next(n, k);
                 }
-                line.extend_from_slice(b" (");
-                for (i, v) in pieces[start..end].iter().enumerate() {
-                    if i > 0 {
-                        line.push(b' ');
-                    }
-                    names.spell(v.0, &mut line, &mut scratch);
-                }
-                line.push(b')');
-                if let Some(m) = material {
-                    line.push(b' ');
-                    line.extend_from_slice(mat_name(m));
-                }
-                line.extend_from_slice(b";\n");
-                out.write_all(&line)?;
-                start = end;
             }
         }
+        drop(next_k);
+        write_in_parallel(&mut out, np, |range, line| {
+            let (mut pieces, mut ends) = (Vec::new(), Vec::new());
+            let mut scratch = Vec::new();
+            for p in range {
+                let patch = PatchId(p as u32);
+                let name = name_of(patch);
+                let material = self.patch_material(patch);
+                pieces_of(patch, &mut pieces, &mut ends);
+                let whole = ends.len() == 1;
+                let mut k = first_k[p];
+                let mut start = 0;
+                for &end in &ends {
+                    line.push(b'f');
+                    if let Some(n) = name {
+                        line.push(b' ');
+                        line.extend_from_slice(n.as_bytes());
+                        if !whole {
+                            line.push(b'.');
+                            push_u64(line, next(n, &mut k) as u64);
+                        }
+                    }
+                    line.extend_from_slice(b" (");
+                    for (i, v) in pieces[start..end].iter().enumerate() {
+                        if i > 0 {
+                            line.push(b' ');
+                        }
+                        names.spell(v.0, line, &mut scratch);
+                    }
+                    line.push(b')');
+                    if let Some(m) = material {
+                        line.push(b' ');
+                        line.extend_from_slice(mat_name(m));
+                    }
+                    line.extend_from_slice(b";\n");
+                    start = end;
+                }
+            }
+        })?;
         out.flush()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Several batches of jobs, the last ones short: the same bytes as one
+    /// serial pass.
+    #[test]
+    fn parallel_writing_keeps_the_order() {
+        let fmt = |r: Range<usize>, buf: &mut Vec<u8>| {
+            for i in r {
+                push_u64(buf, (i as u64).wrapping_mul(2_654_435_761) % 1000);
+                buf.push(b'\n');
+            }
+        };
+        for n in [0, 1, JOB - 1, JOB + 1, 2 * JOB * JOBS + 3] {
+            let mut serial = Vec::new();
+            fmt(0..n, &mut serial);
+            let mut out = Vec::new();
+            write_in_parallel(&mut out, n, fmt).unwrap();
+            assert_eq!(out, serial, "{n} items");
+        }
     }
 }

@@ -2995,7 +2995,6 @@ struct Colours<'s, 'v> {
     colours: Vec<(u32, u32)>,
     /// Colour indices, hashed by value.
     table: hashbrown::HashTable<u32>,
-    ryu: ryu::Buffer,
 }
 
 fn colour_key(val: Rgb) -> [u64; 3] {
@@ -3020,49 +3019,63 @@ impl<'s, 'v> Colours<'s, 'v> {
             amb,
             colours: Vec::new(),
             table: hashbrown::HashTable::new(),
-            ryu: ryu::Buffer::new(),
         }
     }
 
-    /// Finds the distinct colours, in vertex order.
+    /// Finds the distinct colours, in vertex order: the colours' keys and
+    /// hashes are computed in parallel, a block of vertices at a time, and
+    /// looked up and inserted in vertex order.
     fn build(&mut self) {
+        use rayon::prelude::*;
+        const BLOCK: usize = 1 << 16;
         let (solver, amb) = (self.solver, self.amb);
         let taken: rustc_hash::FxHashSet<&str> =
             self.src.materials.iter().map(|m| m.name.as_str()).collect();
         let mut counter = 0u32;
         let mut name = String::new();
-        for v in 0..solver.mesh.num_vertices() {
-            let key = colour_key(value_of(solver, amb, VertId(v as u32)));
-            let h = hash_key(&key);
-            let colours = &self.colours;
-            let found = self
-                .table
-                .find(h, |&i| {
-                    colour_key(value_of(solver, amb, VertId(colours[i as usize].0))) == key
+        let nv = solver.mesh.num_vertices();
+        let mut keys: Vec<([u64; 3], u64)> = Vec::with_capacity(BLOCK.min(nv));
+        for first in (0..nv).step_by(BLOCK) {
+            keys.clear();
+            (first..nv.min(first + BLOCK))
+                .into_par_iter()
+                .map(|v| {
+                    let key = colour_key(value_of(solver, amb, VertId(v as u32)));
+                    (key, hash_key(&key))
                 })
-                .is_some();
-            if found {
-                continue;
-            }
-            let n = loop {
-                use std::fmt::Write as _;
-                name.clear();
-                let _ = write!(name, "_rad{counter}");
-                counter += 1;
-                if !taken.contains(name.as_str()) {
-                    break counter - 1;
+                .collect_into_vec(&mut keys);
+            for (i, &(key, h)) in keys.iter().enumerate() {
+                let v = first + i;
+                let colours = &self.colours;
+                let found = self
+                    .table
+                    .find(h, |&i| {
+                        colour_key(value_of(solver, amb, VertId(colours[i as usize].0))) == key
+                    })
+                    .is_some();
+                if found {
+                    continue;
                 }
-            };
-            let i = self.colours.len() as u32;
-            self.colours.push((v as u32, n));
-            let colours = &self.colours;
-            self.table.insert_unique(h, i, |&j| {
-                hash_key(&colour_key(value_of(
-                    solver,
-                    amb,
-                    VertId(colours[j as usize].0),
-                )))
-            });
+                let n = loop {
+                    use std::fmt::Write as _;
+                    name.clear();
+                    let _ = write!(name, "_rad{counter}");
+                    counter += 1;
+                    if !taken.contains(name.as_str()) {
+                        break counter - 1;
+                    }
+                };
+                let i = self.colours.len() as u32;
+                self.colours.push((v as u32, n));
+                let colours = &self.colours;
+                self.table.insert_unique(h, i, |&j| {
+                    hash_key(&colour_key(value_of(
+                        solver,
+                        amb,
+                        VertId(colours[j as usize].0),
+                    )))
+                });
+            }
         }
     }
 
@@ -3105,24 +3118,24 @@ fn push_rad_name(line: &mut Vec<u8>, n: u32) {
 impl libmesh::VertexColours for Colours<'_, '_> {
     fn write_before_vertices(&mut self, out: &mut dyn std::io::Write) -> std::io::Result<()> {
         self.build();
-        let mut line = Vec::with_capacity(128);
-        for k in 0..self.colours.len() {
-            let (v, n) = self.colours[k];
-            let val = self.value(VertId(v));
-            line.clear();
-            line.extend_from_slice(b"c_rgb ");
-            push_rad_name(&mut line, n);
-            for x in val {
-                line.push(b' ');
-                ug::push_f64(&mut line, x, &mut self.ryu);
+        let this = &*self;
+        libmesh::write_in_parallel(out, this.colours.len(), |range, line| {
+            let mut ryu = ryu::Buffer::new();
+            for k in range {
+                let (v, n) = this.colours[k];
+                let val = this.value(VertId(v));
+                line.extend_from_slice(b"c_rgb ");
+                push_rad_name(line, n);
+                for x in val {
+                    line.push(b' ');
+                    ug::push_f64(line, x, &mut ryu);
+                }
+                line.extend_from_slice(b";\n");
             }
-            line.extend_from_slice(b";\n");
-            out.write_all(&line)?;
-        }
-        Ok(())
+        })
     }
 
-    fn colour_name(&mut self, v: VertId, line: &mut Vec<u8>) -> bool {
+    fn colour_name(&self, v: VertId, line: &mut Vec<u8>) -> bool {
         let n = self.colours[self.index(v)].1;
         push_rad_name(line, n);
         true
