@@ -396,19 +396,26 @@ fn a_pair_the_cuts_make_intersect_is_cut() {
     assert!(out.contains("f wing2.5.t1.i8.i"), "{out}");
 }
 
-/// A known failure of the shallow wedge (docs/decisions.md, "Not solved:
-/// shallow wedges at a large epsilon"), kept as a ready repro: a globe's
-/// top facets cross a ceiling at 11.5° beside a light panel flush with it
-/// (fixtures/clean/globe-cap-through-a-ceiling-by-a-panel.ug, property
-/// seed 116001 at 10 times the default epsilon, carried in the file). After
-/// ugisect the ceiling and the facets are cut along their crossing; ugcopl
-/// then takes a piece near the line as coplanar with the ceiling, and one
-/// intersecting pair is left after the chain. Run it with `--ignored`.
+/// A globe's top facets cross a ceiling at 11.5° beside a light panel
+/// flush with it (fixtures/clean/globe-cap-through-a-ceiling-by-a-panel.ug,
+/// property seed 116001 at 10 times the default epsilon, carried in the
+/// file). ugisect cut the facets along their crossing and again 0.7
+/// epsilon above it; the line where a tip piece meets the ceiling piece it
+/// shares an edge with was then fitted through a ceiling vertex 2.4 m away
+/// (on both planes within epsilon) and ran 3 epsilon off the shared edge,
+/// inside both: one intersecting pair after the chain, 17 overlapping
+/// pairs after ugcut. The line is now fitted through the vertices inside
+/// both faces' boxes (`geom::intersect`).
 #[test]
-#[ignore = "known failure: the shallow wedge at a large epsilon (issue #13)"]
 fn a_globe_cap_through_a_ceiling_leaves_no_defect() {
     let input = std::fs::read(fixture("clean/globe-cap-through-a-ceiling-by-a-panel.ug")).unwrap();
     let out = ugkit::chain(&input);
     let r = check(std::str::from_utf8(&out).unwrap());
     assert_eq!(defects(&r), 0, "{r}");
+    // And its patches, at three lengths.
+    for len in ["0.7", "0.2", "0.05"] {
+        let cut = run_ok("ugcut", &["-l", len], Some(&out));
+        let r = check(&cut);
+        assert_eq!(defects(&r), 0, "-l {len}: {r}");
+    }
 }

@@ -533,6 +533,31 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
                 }
             }
         }
+        // Only those inside both boxes where they span more than 16
+        // epsilon: the faces meet there, and a vertex far outside may lie
+        // on the planes' line within epsilon at its end and not where they
+        // meet (a ceiling's vertex 2.4 m away, on the extension of a cut
+        // along a globe's facet 0.7 epsilon below the ceiling piece's edge
+        // it shares with the facet's tip: the line through it ran 3
+        // epsilon off that edge, inside both faces; property seed 116001 at
+        // 10 times the default epsilon). Where those inside span less, the
+        // far ones fix the direction.
+        let inside: Vec<(f64, DVec3)> = on_both
+            .iter()
+            .copied()
+            .filter(|&(_, q)| q.cmpge(lo).all() && q.cmple(hi).all())
+            .collect();
+        let span = |v: &[(f64, DVec3)]| {
+            let (a, b) = v
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                    (a.min(x.0), b.max(x.0))
+                });
+            b - a
+        };
+        if inside.len() < on_both.len() && span(&inside) > 16.0 * eps {
+            on_both = inside;
+        }
         // The first found of each extreme.
         let mut ends: Option<((f64, DVec3), (f64, DVec3))> = None;
         for &(t, q) in &on_both {
