@@ -381,13 +381,47 @@ fn corner_fan(
         _ => return false,
     };
     let (p, q) = (near[k], near[k + 1]);
-    if (q - p).length() >= 4.0 * eps {
-        return false;
-    }
     let on_both =
         |s: DVec3| a.locate(s, eps) == Location::Boundary && b.locate(s, eps) == Location::Boundary;
     let outside = |s: DVec3| zone.locate(s, eps) == Location::Outside;
-    (on_both(p) && outside(q)) || (on_both(q) && outside(p))
+    let (from, to) = if on_both(p) && outside(q) {
+        (p, q)
+    } else if on_both(q) && outside(p) {
+        (q, p)
+    } else {
+        return false;
+    };
+    if (to - from).length() < 4.0 * eps {
+        return true;
+    }
+    // A longer stretch: the zone face's edge leaves the line at a smaller
+    // angle φ, and its epsilon zone reaches epsilon / sin φ along it. Where
+    // the zone lies on the stretch, bisected between the stretch's middle
+    // (in it) and the far end (outside): a fan when it ends within
+    // `FAN_MAX` epsilons of the point the faces meet at, and the zone face
+    // is nowhere inside along the stretch (a lamp box's side leaving a
+    // round column's facet at 5.4° from the corner where its cut ends, its
+    // epsilon zone over the facet for 10.6 epsilon; `ugcut` cut the facet
+    // so that the stretch was 17 epsilon and its middle in the zone: an
+    // intersecting pair no cut could resolve, property seed 122093 with
+    // curved things, stairs, tilted, at the default epsilon).
+    let (mut lo, mut hi) = ((from + to) / 2.0, to);
+    for _ in 0..40 {
+        let m = (lo + hi) / 2.0;
+        if outside(m) {
+            hi = m;
+        } else {
+            lo = m;
+        }
+    }
+    let reach = (lo - from).length();
+    const FAN_MAX: f64 = 16.0;
+    const SAMPLES: usize = 16;
+    reach <= FAN_MAX * eps
+        && (1..SAMPLES).all(|i| {
+            let s = from + (to - from) * (i as f64 / SAMPLES as f64);
+            zone.locate(s, eps) != Location::Inside
+        })
 }
 
 /// The line where two faces' planes meet, and the parameters along it where
