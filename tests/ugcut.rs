@@ -982,13 +982,27 @@ fn a_length_making_too_many_patches_is_refused() {
 /// `-l 0.7` a piece of the facet had the planes' line across it for 17
 /// epsilon from that corner, its middle in the side's edge zone: ugcheck
 /// counted an intersecting pair that no cut could resolve. Such a stretch
-/// is the fan of the side's edge zone when that zone ends within 16
+/// is the fan of the side's edge zone when that zone ends within 64
 /// epsilon of the corner (`geom::intersect`).
 #[test]
 fn a_box_side_grazing_a_facet_from_a_corner_is_no_intersection() {
     cuts_soundly(
         "cut/lamp-side-grazing-a-column-facet.ug",
         "1.5750143752888702e-5",
+        1e-9,
+    );
+}
+
+/// A pendant's metal face whose edge leaves a vault's piece at under 2.6°
+/// from the point where their boundaries meet, within epsilon of it for 22
+/// to 64 epsilon (fixtures/cut/pendant-face-grazing-a-vault-piece.ug,
+/// property seed 127095 at the default epsilon): with the fan taken only
+/// up to 16 epsilon, every length gave an intersecting pair after ugcut.
+#[test]
+fn a_pendant_face_grazing_a_vault_piece_is_no_intersection() {
+    cuts_soundly(
+        "cut/pendant-face-grazing-a-vault-piece.ug",
+        "8.64522712589484e-6",
         1e-9,
     );
 }
