@@ -289,3 +289,19 @@ fn a_cut_near_a_shared_edge_is_not_snapped_onto_it() {
     assert!(count(&check_eps(&src, &eps), "intersecting") > 0);
     assert_cut_eps(name, &src, &eps, 1e-7);
 }
+
+/// A known failure (issue #13), kept as a ready repro: two triangles of a
+/// column's facets whose common lower corner pokes 9 epsilon through a
+/// floor cross it in segments about 1.1 epsilon long
+/// (fixtures/clean/column-apex-just-through-a-floor.ug, property seed
+/// 130000 at 4 decimals, tilted; epsilon 2e-4, carried in the file).
+/// ugisect cuts the triangles there but the floor comes out whole: two
+/// intersecting pairs after the chain. Run it with `--ignored`.
+#[test]
+#[ignore = "known failure: cuts about 1.1 epsilon long kept in one face, not the other (issue #13)"]
+fn a_column_apex_just_through_a_floor_leaves_no_defect() {
+    let input = std::fs::read(fixture("clean/column-apex-just-through-a-floor.ug")).unwrap();
+    let out = ugkit::chain(&input);
+    let r = check(std::str::from_utf8(&out).unwrap());
+    assert_eq!(count(&r, "intersecting"), 0, "{r}");
+}
