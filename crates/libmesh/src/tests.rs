@@ -729,8 +729,10 @@ fn split_reports_all_new_vertices_in_id_order() {
 
 /// `write_ug` over more patches and vertices than one parallel job takes
 /// (8,192): a 100 × 100 grid of tiles `tI_J`, two of them named `t0_0.2`
-/// and `t0_0.3` instead, which the pieces of `t0_0` skip; every third
-/// tile split, then every third of the others.
+/// and `t0_0.3` instead, which the pieces of `t0_0` skip, and the last
+/// one named `t0_0` too (in memory: a parsed model's names are unique),
+/// whose pieces count on after the first's; every third tile split, then
+/// every third of the others.
 #[test]
 fn streamed_output_is_the_written_model_across_jobs() {
     use std::fmt::Write as _;
@@ -758,7 +760,10 @@ fn streamed_output_is_the_written_model_across_jobs() {
             );
         }
     }
-    let (src, mut m) = mesh(&src);
+    let mut src = parse(&src);
+    let last = src.faces.len() - 1;
+    src.faces[last].name = Some("t0_0".into());
+    let mut m = Mesh::from_model(&src, EPS).unwrap();
     for round in 0..2 {
         let leaves: Vec<ElemId> = m.leaves().collect();
         for e in leaves {

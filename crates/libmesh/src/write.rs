@@ -338,16 +338,6 @@ impl Mesh {
             }
         };
         let np = self.patches.len();
-        let counts: Vec<u32> = (0..np)
-            .into_par_iter()
-            .map_init(
-                || (Vec::new(), Vec::new()),
-                |(pieces, ends), p| {
-                    pieces_of(PatchId(p as u32), pieces, ends);
-                    ends.len() as u32
-                },
-            )
-            .collect();
         // The input's face and wire names `PREFIX.k` (k as written: no
         // leading zero), as (PREFIX, k): the derived names they take.
         let taken: FxHashSet<(&str, u32)> = src
@@ -377,22 +367,36 @@ impl Mesh {
                 .get(self.patch_face(p).idx())
                 .and_then(|f| f.name.as_deref())
         };
-        // Per patch, its name's count before its first piece.
+        // Per patch, its name's count before its first piece: 0 but where
+        // patches share a name (a parsed model's face names are unique, so
+        // only a model built in memory), whose pieces are counted first.
         let mut first_k = vec![0u32; np];
-        let mut next_k: FxHashMap<&str, u32> = FxHashMap::default();
+        let mut patches_named: FxHashMap<&str, u32> = FxHashMap::default();
         for p in 0..np {
-            if counts[p] < 2 {
-                continue;
-            }
             if let Some(n) = name_of(PatchId(p as u32)) {
+                *patches_named.entry(n).or_insert(0) += 1;
+            }
+        }
+        if patches_named.values().any(|&c| c > 1) {
+            let mut next_k: FxHashMap<&str, u32> = FxHashMap::default();
+            let (mut pieces, mut ends) = (Vec::new(), Vec::new());
+            for (p, first) in first_k.iter_mut().enumerate() {
+                let patch = PatchId(p as u32);
+                let Some(n) = name_of(patch).filter(|n| patches_named[n] > 1) else {
+                    continue;
+                };
+                pieces_of(patch, &mut pieces, &mut ends);
+                if ends.len() < 2 {
+                    continue;
+                }
                 let k = next_k.entry(n).or_insert(0);
-                first_k[p] = *k;
-                for _ in 0..counts[p] {
+                *first = *k;
+                for _ in 0..ends.len() {
                     next(n, k);
                 }
             }
         }
-        drop(next_k);
+        drop(patches_named);
         write_in_parallel(&mut out, np, |range, line| {
             let (mut pieces, mut ends) = (Vec::new(), Vec::new());
             let mut scratch = Vec::new();

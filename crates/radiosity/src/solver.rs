@@ -2993,8 +2993,8 @@ struct Colours<'s, 'v> {
     amb: Rgb,
     /// Per colour: its first vertex and the `N` of its name `_radN`.
     colours: Vec<(u32, u32)>,
-    /// Colour indices, hashed by value.
-    table: hashbrown::HashTable<u32>,
+    /// Per vertex, its colour's index in `colours`.
+    of: Vec<u32>,
 }
 
 fn colour_key(val: Rgb) -> [u64; 3] {
@@ -3018,42 +3018,41 @@ impl<'s, 'v> Colours<'s, 'v> {
             src,
             amb,
             colours: Vec::new(),
-            table: hashbrown::HashTable::new(),
+            of: Vec::new(),
         }
     }
 
-    /// Finds the distinct colours, in vertex order: the colours' keys and
-    /// hashes are computed in parallel, a block of vertices at a time, and
-    /// looked up and inserted in vertex order.
+    /// Finds the distinct colours, in vertex order, and each vertex's: the
+    /// colours' keys and hashes are computed in parallel, a block of
+    /// vertices at a time, and looked up and inserted in vertex order.
     fn build(&mut self) {
         use rayon::prelude::*;
         const BLOCK: usize = 1 << 16;
         let (solver, amb) = (self.solver, self.amb);
+        let key_of = |v: u32| colour_key(value_of(solver, amb, VertId(v)));
         let taken: rustc_hash::FxHashSet<&str> =
             self.src.materials.iter().map(|m| m.name.as_str()).collect();
+        // Colour indices, hashed by value.
+        let mut table: hashbrown::HashTable<u32> = hashbrown::HashTable::new();
         let mut counter = 0u32;
         let mut name = String::new();
         let nv = solver.mesh.num_vertices();
+        self.of = Vec::with_capacity(nv);
         let mut keys: Vec<([u64; 3], u64)> = Vec::with_capacity(BLOCK.min(nv));
         for first in (0..nv).step_by(BLOCK) {
             keys.clear();
             (first..nv.min(first + BLOCK))
                 .into_par_iter()
                 .map(|v| {
-                    let key = colour_key(value_of(solver, amb, VertId(v as u32)));
+                    let key = key_of(v as u32);
                     (key, hash_key(&key))
                 })
                 .collect_into_vec(&mut keys);
             for (i, &(key, h)) in keys.iter().enumerate() {
                 let v = first + i;
                 let colours = &self.colours;
-                let found = self
-                    .table
-                    .find(h, |&i| {
-                        colour_key(value_of(solver, amb, VertId(colours[i as usize].0))) == key
-                    })
-                    .is_some();
-                if found {
+                if let Some(&c) = table.find(h, |&c| key_of(colours[c as usize].0) == key) {
+                    self.of.push(c);
                     continue;
                 }
                 let n = loop {
@@ -3065,32 +3064,17 @@ impl<'s, 'v> Colours<'s, 'v> {
                         break counter - 1;
                     }
                 };
-                let i = self.colours.len() as u32;
+                let c = self.colours.len() as u32;
                 self.colours.push((v as u32, n));
+                self.of.push(c);
                 let colours = &self.colours;
-                self.table.insert_unique(h, i, |&j| {
-                    hash_key(&colour_key(value_of(
-                        solver,
-                        amb,
-                        VertId(colours[j as usize].0),
-                    )))
-                });
+                table.insert_unique(h, c, |&j| hash_key(&key_of(colours[j as usize].0)));
             }
         }
     }
 
     fn value(&self, v: VertId) -> Rgb {
         value_of(self.solver, self.amb, v)
-    }
-
-    fn index(&self, v: VertId) -> usize {
-        let key = colour_key(self.value(v));
-        *self
-            .table
-            .find(hash_key(&key), |&i| {
-                colour_key(self.value(VertId(self.colours[i as usize].0))) == key
-            })
-            .expect("every vertex's colour is in the table") as usize
     }
 }
 
@@ -3136,7 +3120,7 @@ impl libmesh::VertexColours for Colours<'_, '_> {
     }
 
     fn colour_name(&self, v: VertId, line: &mut Vec<u8>) -> bool {
-        let n = self.colours[self.index(v)].1;
+        let n = self.colours[self.of[v.idx()] as usize].1;
         push_rad_name(line, n);
         true
     }
