@@ -290,18 +290,37 @@ fn a_cut_near_a_shared_edge_is_not_snapped_onto_it() {
     assert_cut_eps(name, &src, &eps, 1e-7);
 }
 
-/// A known failure (issue #13), kept as a ready repro: two triangles of a
-/// column's facets whose common lower corner pokes 9 epsilon through a
-/// floor cross it in segments about 1.1 epsilon long
+/// Two triangles of a column's facets whose common lower corner pokes 9
+/// epsilon through a floor cross it in segments about 1.1 epsilon long
 /// (fixtures/clean/column-apex-just-through-a-floor.ug, property seed
-/// 130000 at 4 decimals, tilted; epsilon 2e-4, carried in the file).
-/// ugisect cuts the triangles there but the floor comes out whole: two
-/// intersecting pairs after the chain. Run it with `--ignored`.
+/// 130000 at 4 decimals, tilted; epsilon 2e-4, carried in the file). The
+/// three cut points in the floor are each more than epsilon from the
+/// others but within epsilon of the line through the other two, so the
+/// floor's snap rounding routed its cuts back and forth until its rounds
+/// ran out, and the floor came out whole: two intersecting pairs after the
+/// chain. Now such a cluster is merged.
 #[test]
-#[ignore = "known failure: cuts about 1.1 epsilon long kept in one face, not the other (issue #13)"]
 fn a_column_apex_just_through_a_floor_leaves_no_defect() {
     let input = std::fs::read(fixture("clean/column-apex-just-through-a-floor.ug")).unwrap();
+    assert!(count(&check(std::str::from_utf8(&input).unwrap()), "intersecting") > 0);
     let out = ugkit::chain(&input);
-    let r = check(std::str::from_utf8(&out).unwrap());
-    assert_eq!(count(&r, "intersecting"), 0, "{r}");
+    let out = std::str::from_utf8(&out).unwrap();
+    let keys = [
+        "intersecting",
+        "tvertices",
+        "overlapping",
+        "degenerate",
+        "inconsistent",
+    ];
+    let r = check(out);
+    for key in keys {
+        assert_eq!(count(&r, key), 0, "{key} after the chain: {r}");
+    }
+    for l in ["2", "0.3"] {
+        let cut = run_ok("ugcut", &["-q", "-l", l], Some(out.as_bytes()));
+        let r = check(&cut);
+        for key in keys.iter().chain(&["nonpatch"]) {
+            assert_eq!(count(&r, key), 0, "{key} after ugcut -l {l}: {r}");
+        }
+    }
 }

@@ -221,6 +221,9 @@ struct Hot {
     cell: f64,
     grid: FxHashMap<(i64, i64), Vec<u32>>,
     r: f64,
+    /// Points merged by [`snap_round`] (a cluster too tight to route edges
+    /// through): the point each went into.
+    alias: FxHashMap<u32, u32>,
 }
 
 impl Hot {
@@ -231,6 +234,7 @@ impl Hot {
             cell: (2.0 * r).max(f64::MIN_POSITIVE),
             grid: FxHashMap::default(),
             r,
+            alias: FxHashMap::default(),
         }
     }
 
@@ -266,6 +270,24 @@ impl Hot {
         let k = self.key(p);
         self.grid.entry(k).or_default().push(id);
         id
+    }
+
+    /// Merges point `k` into point `into` (neither hot again nor found).
+    fn merge(&mut self, k: u32, into: u32) {
+        self.real[k as usize] = false;
+        self.alias.insert(k, into);
+        let key = self.key(self.pts[k as usize]);
+        if let Some(v) = self.grid.get_mut(&key) {
+            v.retain(|&i| i != k);
+        }
+    }
+
+    /// The point that `k` was merged into, or `k`.
+    fn find(&self, mut k: u32) -> u32 {
+        while let Some(&n) = self.alias.get(&k) {
+            k = n;
+        }
+        k
     }
 
     /// The point within `r` of `p`, or a new one.
@@ -397,6 +419,9 @@ pub fn arrange(points: &[DVec2], segments: &[Segment], opts: &Options) -> Arrang
     }
     let g = Graph::build(&hot.pts, &edges);
     let faces = g.faces(&hot.pts, &edges);
+    for r in rep.iter_mut() {
+        *r = hot.find(*r);
+    }
     Arrangement {
         points: hot.pts,
         inputs,
@@ -513,6 +538,7 @@ fn snap_round(hot: &mut Hot, edges: &[(u32, u32, Tags)], r: f64) -> (Vec<(u32, u
     );
     let step = query_step(&hot.pts);
     let mut out: Vec<(u32, u32, Tags)> = Vec::with_capacity(edges.len());
+    let mut merges: Vec<(u32, u32)> = Vec::new();
     for e in edges {
         let (a, b) = pts(hot, e);
         let mut on: Vec<(f64, u32)> = Vec::new();
@@ -534,6 +560,25 @@ fn snap_round(hot: &mut Hot, edges: &[(u32, u32, Tags)], r: f64) -> (Vec<(u32, u
         }
         changed = true;
         on.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        // Three points, each more than r from the others, where each edge
+        // between two of them passes within r of the third: no route
+        // through them settles (the edge goes through the third point,
+        // and one of the new edges passes within r of the first edge's
+        // end), so the closest two are merged.
+        for &(_, k) in &on {
+            let pk = hot.pts[k as usize];
+            if seg_dist(a, pk, b).0 <= r || seg_dist(b, a, pk).0 <= r {
+                let (da, db, dab) = (a.distance(pk), b.distance(pk), a.distance(b));
+                let (x, y) = if dab <= da.min(db) {
+                    (e.0, e.1)
+                } else if da <= db {
+                    (e.0, k)
+                } else {
+                    (e.1, k)
+                };
+                merges.push((x.min(y), x.max(y)));
+            }
+        }
         let mut prev = e.0;
         for (_, k) in on {
             if k != prev {
@@ -544,6 +589,26 @@ fn snap_round(hot: &mut Hot, edges: &[(u32, u32, Tags)], r: f64) -> (Vec<(u32, u
         if prev != e.1 {
             out.push((prev, e.1, e.2.clone()));
         }
+    }
+    // The tight clusters merged (into the lower point), edges renamed: one
+    // pair per point and round, so that a cluster loses one point at a
+    // time and two that settle stay apart.
+    merges.sort_unstable();
+    merges.dedup();
+    let mut touched: Vec<u32> = Vec::new();
+    for (x, y) in merges {
+        if touched.contains(&x) || touched.contains(&y) {
+            continue;
+        }
+        hot.merge(y, x);
+        touched.extend([x, y]);
+    }
+    if !hot.alias.is_empty() {
+        for e in out.iter_mut() {
+            e.0 = hot.find(e.0);
+            e.1 = hot.find(e.1);
+        }
+        out.retain(|e| e.0 != e.1);
     }
     let out = dedup(out);
     if !changed && out.len() != edges.len() {

@@ -352,6 +352,60 @@ fn a_cut_ending_inside_is_extended_to_the_boundary() {
     assert_eq!(inside(&b, 0)[0].loops.len(), 1);
 }
 
+/// Three cut points each 1.1 snap radii from the others (an equilateral
+/// triangle: each within 0.95 radii of the line through the other two),
+/// joined by two cuts, in a rectangle (property seed 130000 at 4
+/// decimals: a column's corner poking through a floor). Routing an edge
+/// through the third point gives a new edge that passes within the radius
+/// of the first edge's end, and so on: the rounds ran out, the extension
+/// never reached the boundary, and the rectangle stayed whole. Such a
+/// cluster is merged, and the cut splits the rectangle.
+#[test]
+fn a_cluster_too_tight_to_route_through_is_merged() {
+    let r = 0.01;
+    let c = p(2.0, 1.0);
+    let rad = 1.1 * r / 3f64.sqrt();
+    let at = |deg: f64| c + DVec2::from_angle(deg.to_radians()) * rad;
+    for turn in [0.0, 17.0, 40.0, 90.0] {
+        let pts = [
+            p(0., 0.),
+            p(4., 0.),
+            p(4., 2.),
+            p(0., 2.),
+            at(turn + 90.0),
+            at(turn + 210.0),
+            at(turn + 330.0),
+        ];
+        let mut segs = ring(0, 4, Tag::Toggle(0));
+        for (a, b) in [(4, 5), (5, 6)] {
+            segs.push(Segment {
+                a,
+                b,
+                tag: Tag::Cut,
+            });
+        }
+        let mut o = Options::new(r);
+        o.extend_cuts = true;
+        let a = arrange(&pts, &segs, &o);
+        assert!(a.converged, "turned {turn}: {} rounds", a.rounds);
+        let ins = inside(&a, 0);
+        assert_eq!(
+            ins.len(),
+            2,
+            "turned {turn}: {:?} {:?} {:?} {:?}",
+            a.faces,
+            a.edges,
+            a.rep,
+            &a.points[4..]
+        );
+        assert!((area_of(&a, 0) - 8.0).abs() < 1e-9);
+        check_invariants(&a, r);
+        // The merged point's representative is one of the other two.
+        let reps: std::collections::BTreeSet<u32> = a.rep[4..].iter().copied().collect();
+        assert_eq!(reps.len(), 2, "turned {turn}: {:?}", a.rep);
+    }
+}
+
 #[test]
 fn a_cut_from_the_boundary_to_a_hole_gets_its_whole_line() {
     // A square with a square hole and a cut from the outer edge to the hole.
