@@ -132,6 +132,11 @@ fn ambiguous_parts_can_be_made_double_sided() {
     let names: Vec<&str> = ns.iter().map(|(n, _)| n.as_str()).collect();
     assert_eq!(&names[..2], ["w1_ny", "w1_ny.back"]);
     assert_faces_point_as_named(&out, "double-sided");
+    // Run again, ugflip keeps its own twins reversed (it turned each like
+    // its face, as for a copied face, and ugclean then removed one).
+    let again = run_ok("ugflip", &["-q"], Some(out.as_bytes()));
+    assert_faces_point_as_named(&again, "ugflip run again");
+    assert_eq!(normals(&again).len(), 16);
 }
 
 #[test]
@@ -220,4 +225,43 @@ fn deterministic_at_any_thread_count() {
     assert_eq!(String::from_utf8(one).unwrap(), many);
     // Idempotent: an oriented model stays as it is.
     assert_eq!(run_ok("ugflip", &[], Some(many.as_bytes())), many);
+}
+
+/// ugflip after ugclean (`ugcopl | ugisect | ugclean | ugflip`, an order a
+/// user may choose) on fixtures/flip/partition-end-by-a-window.ug: the
+/// pieces of a partition's end cap that lie back to back with the wall
+/// keep facing the way the rest of the cap faces, so ugflip leaves no
+/// coincident pair and no inconsistent edge (it turned them like the
+/// wall's pieces, as for a copied face).
+#[test]
+fn back_to_back_pieces_of_two_surfaces_keep_facing_their_own_way() {
+    let src = std::fs::read(fixture("flip/partition-end-by-a-window.ug")).unwrap();
+    let mut text = src;
+    for tool in ["ugcopl", "ugisect", "ugclean"] {
+        text = run_ok(tool, &["-q"], Some(&text)).into_bytes();
+    }
+    let json = |t: &[u8]| -> serde_json::Value {
+        serde_json::from_str(&run_ok("ugcheck", &["--json"], Some(t))).unwrap()
+    };
+    let count = |r: &serde_json::Value, k: &str| r[k].as_array().unwrap().len();
+    let before = json(&text);
+    for k in ["coincident", "inconsistent", "overlapping", "intersecting"] {
+        assert_eq!(count(&before, k), 0, "{k} before ugflip: {before}");
+    }
+    // The cap's pieces: one back to back with the wall below the window.
+    let caps = normals(std::str::from_utf8(&text).unwrap())
+        .into_iter()
+        .filter(|(n, _)| n.starts_with("cap"))
+        .count();
+    assert!(caps >= 3, "{caps} pieces of the cap");
+    let out = run_ok("ugflip", &["-q"], Some(&text));
+    let after = json(out.as_bytes());
+    for k in ["coincident", "inconsistent"] {
+        assert_eq!(count(&after, k), 0, "{k} after ugflip: {after}");
+    }
+    for (name, n) in normals(&out) {
+        if name.starts_with("cap") {
+            assert!(n[0] < 0.0, "{name} faces {n:?}");
+        }
+    }
 }

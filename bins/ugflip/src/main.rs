@@ -108,7 +108,7 @@ fn main() -> std::process::ExitCode {
             }
         }
         c.verbose(format!(
-            "epsilon {eps:e}; {} components; flipped {} faces: {} for consistency, {} outward (solids), {} inward (rooms), {} toward the scene (open parts), {} by light bombs, {} by name; {} double-sided twins added; {} duplicates turned like their twin; {} ambiguous",
+            "epsilon {eps:e}; {} components; flipped {} faces: {} for consistency, {} outward (solids), {} inward (rooms), {} toward the scene (open parts), {} by light bombs, {} by name; {} double-sided twins added; {} duplicates turned like their own surface or their twin; {} ambiguous",
             r.components, r.flipped(), r.consistency, r.outward, r.inward, r.toward_scene, r.by_bombs, r.by_name, r.doubled, r.duplicates, r.ambiguous.len()
         ));
         Ok(out)

@@ -222,8 +222,10 @@ fn hemisphere(k: usize) -> Vec<DVec3> {
 /// Adjacency is decided on a welded copy (vertices within `eps` merged,
 /// T-vertices inserted), so the result does not depend on whether the
 /// grouper ran first; a face that duplicates an earlier one (the same
-/// vertices once welded) takes no part and is then oriented like it (so
-/// `ugclean` removes it as coincident).
+/// vertices once welded) takes no part and is then oriented by the faces
+/// of its material around it, or where they do not decide like its twin
+/// (so `ugclean` removes a copy as coincident); a `NAME.back` twin of
+/// `NAME` (what `--double-sided` adds) keeps its orientation.
 pub fn orient(model: Model, opts: &Options) -> Result<(Model, Report), UnknownFace> {
     let welded = opts.auto.then(|| model.clone());
     let mut mesh = Mesh::from_model(model);
@@ -248,7 +250,7 @@ pub fn orient(model: Model, opts: &Options) -> Result<(Model, Report), UnknownFa
         winged::weld::split_edges(&mut work, opts.eps);
         // Duplicates: the same set of vertices as an earlier face.
         let mut first: rustc_hash::FxHashMap<Vec<ug::VertexId>, FaceId> = Default::default();
-        let mut ghosts: Vec<(FaceId, FaceId)> = Vec::new();
+        let mut ghosts: Vec<(FaceId, FaceId, Face)> = Vec::new();
         for f in work.faces().collect::<Vec<_>>() {
             let mut key: Vec<ug::VertexId> =
                 work.face(f).contours.iter().flatten().copied().collect();
@@ -256,7 +258,7 @@ pub fn orient(model: Model, opts: &Options) -> Result<(Model, Report), UnknownFa
             key.dedup();
             match first.get(&key) {
                 Some(&o) => {
-                    ghosts.push((f, o));
+                    ghosts.push((f, o, work.face(f).clone()));
                     work.remove_face(f);
                 }
                 None => {
@@ -271,10 +273,27 @@ pub fn orient(model: Model, opts: &Options) -> Result<(Model, Report), UnknownFa
                 mesh.flip_face(f);
             }
         }
-        for (g, o) in ghosts {
-            if let (Some(ng), Some(no)) = (mesh.face_normal(g), mesh.face_normal(o))
-                && ng.dot(no) < 0.0
+        let uses = (!ghosts.is_empty()).then(|| edge_uses(&work));
+        for (g, o, welded) in ghosts {
+            // The reversed twin that `--double-sided` added (`NAME.back`)
+            // stays reversed: ugflip run again keeps its own output.
+            let back = |f: FaceId| mesh.face(f).name.clone();
+            if let (Some(gn), Some(on)) = (back(g), back(o))
+                && gn.strip_suffix(".back") == Some(on.as_str())
             {
+                continue;
+            }
+            let turn = match uses
+                .as_ref()
+                .and_then(|u| own_surface(u, &work, &welded, o))
+            {
+                Some(flip) => flip,
+                None => matches!(
+                    (mesh.face_normal(g), mesh.face_normal(o)),
+                    (Some(ng), Some(no)) if ng.dot(no) < 0.0
+                ),
+            };
+            if turn {
                 mesh.flip_face(g);
                 rep.duplicates += 1;
             }
@@ -338,6 +357,67 @@ pub fn orient(model: Model, opts: &Options) -> Result<(Model, Report), UnknownFa
 
 /// Automatic orientation (on `mesh`, in place); returns the faces of
 /// ambiguous components and the faces flipped.
+/// Every contour edge's uses (welded vertex pair, lower first) by live
+/// faces: the face and whether it walks the edge from the lower vertex.
+type EdgeUses = rustc_hash::FxHashMap<(ug::VertexId, ug::VertexId), Vec<(FaceId, bool)>>;
+
+fn edge_uses(mesh: &Mesh) -> EdgeUses {
+    let mut uses = EdgeUses::default();
+    for f in mesh.faces() {
+        for c in &mesh.face(f).contours {
+            for (i, &a) in c.iter().enumerate() {
+                let b = c[(i + 1) % c.len()];
+                if a != b {
+                    uses.entry((a.min(b), a.max(b)))
+                        .or_default()
+                        .push((f, a < b));
+                }
+            }
+        }
+    }
+    uses
+}
+
+/// How a duplicate face (`ghost`, its welded contours as given) should
+/// face by its own surface: the faces of its material that share its edges
+/// (but its twin), as the automatic step oriented them. `Some(true)` when
+/// more of them walk its edges the same way it does (it must turn),
+/// `Some(false)` when more walk them the other way, `None` when there are
+/// none or as many each way. A duplicate is thus oriented like its twin
+/// when it is a copy of it (same material, same neighbours: ugclean then
+/// removes it), but two surfaces of different materials that meet back to
+/// back (ugcopl's pieces where a mullion's side lies on a wall, in Soda
+/// Hall) each keep facing their own way.
+fn own_surface(uses: &EdgeUses, work: &Mesh, ghost: &Face, twin: FaceId) -> Option<bool> {
+    let (mut same, mut other) = (0usize, 0usize);
+    for c in &ghost.contours {
+        for (i, &a) in c.iter().enumerate() {
+            let b = c[(i + 1) % c.len()];
+            if a == b {
+                continue;
+            }
+            let Some(list) = uses.get(&(a.min(b), a.max(b))) else {
+                continue;
+            };
+            for &(h, from_low) in list {
+                if h == twin || work.face(h).material != ghost.material {
+                    continue;
+                }
+                if from_low == (a < b) {
+                    same += 1;
+                } else {
+                    other += 1;
+                }
+            }
+        }
+    }
+    match same.cmp(&other) {
+        std::cmp::Ordering::Greater => Some(true),
+        std::cmp::Ordering::Less => Some(false),
+        std::cmp::Ordering::Equal => None,
+    }
+}
+
 fn automatic(
     mesh: &mut Mesh,
     opts: &Options,
