@@ -144,7 +144,25 @@ fn sample(mesh: &Mesh, f: FaceId) -> Option<Sample> {
     let pts = mesh.face_points(f);
     let n = mesh.face_normal(f)?;
     let flat: Vec<DVec3> = pts.iter().flatten().copied().collect();
-    let tris = face_triangles(&pts);
+    // Each triangle's corners, and the triangles, in an order of their
+    // positions, not of the contour's walk: the face turned over is
+    // sampled at the same points (ugflip run twice flips nothing more).
+    let key = |i: usize| flat[i].to_array();
+    let cmp = |a: &usize, b: &usize| {
+        let (x, y) = (key(*a), key(*b));
+        x[0].total_cmp(&y[0])
+            .then(x[1].total_cmp(&y[1]))
+            .then(x[2].total_cmp(&y[2]))
+    };
+    let mut tris = face_triangles(&pts);
+    for t in tris.iter_mut() {
+        t.sort_by(cmp);
+    }
+    tris.sort_by(|a, b| {
+        cmp(&a[0], &b[0])
+            .then_with(|| cmp(&a[1], &b[1]))
+            .then_with(|| cmp(&a[2], &b[2]))
+    });
     let best = tris
         .iter()
         .max_by(|a, b| tri_area(&flat, a).total_cmp(&tri_area(&flat, b)))?;
@@ -770,7 +788,20 @@ fn decide(
             let Some(s) = &samples[f.idx()] else {
                 return (other, own);
             };
-            let frame = Frame::new(s.p, s.n);
+            // The frame of the normal's unsigned direction (its largest
+            // component positive), the sides by the normal: turned over,
+            // the face casts the same rays from each side.
+            let big = s.n.abs().max_element();
+            let nc = if s.n.x.abs() == big && s.n.x < 0.0
+                || s.n.x.abs() != big && s.n.y.abs() == big && s.n.y < 0.0
+                || s.n.x.abs() != big && s.n.y.abs() != big && s.n.z < 0.0
+            {
+                -s.n
+            } else {
+                s.n
+            };
+            let sgn = if nc == s.n { 1.0 } else { -1.0 };
+            let frame = Frame::new(s.p, nc);
             // Epsilon off the face, and (far from the origin) at least
             // 1e-12 of the distance, a thousand times the rounding of the
             // point there. (1e-9 of it was 4 mm on a site 4·10⁶ m away:
@@ -781,7 +812,7 @@ fn decide(
             for (k, side) in [1.0, -1.0].into_iter().enumerate() {
                 for (i, d) in dirs.iter().enumerate() {
                     let o = s.spread[i % s.spread.len()] + s.n * (side * delta);
-                    let dir = (frame.u * d.x + frame.v * d.y + frame.n * d.z) * side;
+                    let dir = (frame.u * d.x + frame.v * d.y + frame.n * d.z) * (side * sgn);
                     if let Some(h) = bvh.intersect(o, dir, 0.0, f64::INFINITY, |id| id != f.0) {
                         let seen = h.t * h.t * w;
                         if comp[h.id as usize] == c {
