@@ -548,23 +548,44 @@ fn automatic(
     let objects = Objects::new(&comps, &object_of, &samples);
 
     // 2. Decide each component's side: +1 keep, -1 flip, 0 ambiguous.
-    let decisions: Vec<(i32, Reason)> = comps
-        .par_iter()
+    // First the closed ones (by their volume), then the open ones by the
+    // visibility vote, where a ray that meets the back of a closed one's
+    // face (it started inside a solid, behind a face lying on its surface
+    // within epsilon) sees nothing.
+    let decide_with = |c: usize, solids: Option<&[i8]>| {
+        decide(
+            mesh,
+            &bvh,
+            &comp,
+            &rel,
+            &samples,
+            c,
+            &comps[c],
+            closed_union[c],
+            &objects,
+            &object_of,
+            opts,
+            solids,
+        )
+    };
+    let first: Vec<Option<(i32, Reason)>> = (0..comps.len())
+        .into_par_iter()
+        .map(|c| decide_with(c, None))
+        .collect();
+    let mut solids = vec![0i8; nf];
+    for (c, d) in first.iter().enumerate() {
+        if let Some((d, Reason::Outward | Reason::Inward)) = d {
+            for f in &comps[c] {
+                solids[f.idx()] = if *d < 0 { -1 } else { 1 };
+            }
+        }
+    }
+    let decisions: Vec<(i32, Reason)> = first
+        .into_par_iter()
         .enumerate()
-        .map(|(c, members)| {
-            decide(
-                mesh,
-                &bvh,
-                &comp,
-                &rel,
-                &samples,
-                c,
-                members,
-                closed_union[c],
-                &objects,
-                &object_of,
-                opts,
-            )
+        .map(|(c, d)| {
+            d.or_else(|| decide_with(c, Some(&solids)))
+                .unwrap_or((0, Reason::None))
         })
         .collect();
     let mut ambiguous = Vec::new();
@@ -726,22 +747,29 @@ fn decide(
     objects: &Objects,
     object_of: &[usize],
     opts: &Options,
-) -> (i32, Reason) {
+    solids: Option<&[i8]>,
+) -> Option<(i32, Reason)> {
     let total_area: f64 = members
         .iter()
         .filter_map(|f| samples[f.idx()].as_ref())
         .map(|s| s.area)
         .sum();
     if total_area <= 0.0 {
-        return (1, Reason::None);
+        return Some((1, Reason::None));
     }
-    // Closed: every edge of every member has exactly two uses, both in this
-    // component (or two components that close each other, see `close_pairs`).
+    // Closed: every edge of every member has exactly two uses in this
+    // component (or two components that close each other, see
+    // `close_pairs`). Uses by other components do not count: a slab with
+    // walls standing flush on its edges is still a closed box (its edges
+    // have four uses), and judging it by the visibility vote turned the
+    // 100k building's ground slab inside out once the vote's rays changed
+    // (from inside a thin slab every ray sees its own faces, far away
+    // along it).
     let closed = closed_union
         || members.iter().all(|&f| {
             mesh.face_edges(f).iter().all(|&e| {
                 let u = &mesh.edge(e).uses;
-                u.len() == 2 && u.iter().all(|x| comp[x.face.idx()] == c)
+                u.iter().filter(|x| comp[x.face.idx()] == c).count() == 2
             })
         });
     if closed {
@@ -764,15 +792,17 @@ fn decide(
         if vol.abs() > opts.eps * total_area.max(size * size) {
             let encloses = encloses(mesh, members, samples, c, objects, object_of, opts, lo, hi);
             let outward = vol > 0.0;
-            return if encloses {
+            return Some(if encloses {
                 (if outward { -1 } else { 1 }, Reason::Inward)
             } else {
                 (if outward { 1 } else { -1 }, Reason::Outward)
-            };
+            });
         }
         // Flat closed surfaces (two sides of a zero-thickness wall): nothing to decide.
-        return (1, Reason::None);
+        return Some((1, Reason::None));
     }
+    // Open: the vote, once the closed components are decided.
+    let solids = solids?;
     // Open: visibility vote. Each ray that hits scene at distance t sees about
     // t² of surface (per unit solid angle), so the sums estimate how much of the
     // scene each side sees; a face close under a ceiling sees little behind it.
@@ -814,6 +844,13 @@ fn decide(
                     let o = s.spread[i % s.spread.len()] + s.n * (side * delta);
                     let dir = (frame.u * d.x + frame.v * d.y + frame.n * d.z) * (side * sgn);
                     if let Some(h) = bvh.intersect(o, dir, 0.0, f64::INFINITY, |id| id != f.0) {
+                        let hit = h.id as usize;
+                        if solids[hit] != 0
+                            && let Some(hs) = &samples[hit]
+                            && dir.dot(hs.n) * f64::from(solids[hit]) > 0.0
+                        {
+                            continue;
+                        }
                         let seen = h.t * h.t * w;
                         if comp[h.id as usize] == c {
                             own[k] += seen;
@@ -844,10 +881,10 @@ fn decide(
     // first turned the Soda Hall floor inside out.) Own faces alone still
     // decide where nothing else is seen (a box missing a side faces inward).
     let all = [other[0] + own[0], other[1] + own[1]];
-    match verdict(all) {
+    Some(match verdict(all) {
         Some(d) => (d, Reason::Scene),
         None => (0, Reason::None),
-    }
+    })
 }
 
 fn bbox_of(mesh: &Mesh, members: &[FaceId]) -> (DVec3, DVec3) {
