@@ -370,3 +370,25 @@ fn slabs_under_flush_walls_face_outward() {
         }
     }
 }
+
+/// A sheet lying on a larger part's surface faces the way that surface
+/// faces: fixtures/flip/paper-under-a-monitor.ug, a paper sunk 0.3 epsilon
+/// into a desk's top, flipped, with a monitor standing on it, so that its
+/// vote sees almost nothing from either side. (With the vote alone, or
+/// with the nearest face under the paper rather than the largest part's —
+/// the monitor's bottom, facing down — it faced down into the desk.)
+#[test]
+fn a_sheet_on_a_surface_faces_like_it() {
+    let path = fixture("flip/paper-under-a-monitor.ug");
+    let out = run_ok("ugflip", &["-q", path.to_str().unwrap()], None);
+    let ns = normals(&out);
+    let paper = ns.iter().find(|(n, _)| n == "paper").unwrap().1;
+    assert!(paper[2] > 0.0, "the paper faces {paper:?}");
+    for (name, n) in &ns {
+        if name.starts_with("desk_1") {
+            assert!(n[2] > 0.0, "the desk's top faces {n:?}");
+        }
+    }
+    // Run again, nothing changes.
+    assert_eq!(run_ok("ugflip", &["-q"], Some(out.as_bytes())), out);
+}

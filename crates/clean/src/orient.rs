@@ -588,6 +588,8 @@ fn automatic(
                 .unwrap_or((0, Reason::None))
         })
         .collect();
+    // 3. An open part lying on a larger one's surface faces like it.
+    let decisions = lying_on(&bvh, &comp, &comps, &samples, decisions, opts);
     let mut ambiguous = Vec::new();
     let mut flipped = Vec::new();
     for (c, members) in comps.iter().enumerate() {
@@ -617,6 +619,96 @@ fn automatic(
     }
     flipped.sort_unstable();
     (ambiguous, flipped)
+}
+
+/// Open parts that lie on another, larger part's surface (most of their
+/// area within about epsilon of its faces, on planes within 26°: a rug on
+/// a floor, a paper on a desk, a picture on a wall, a cap's copy fanned
+/// the other way on the cap) face the way that surface faces, whatever
+/// their own vote said: from a sheet on a surface one side sees almost
+/// nothing and the other the room, or, when the sheet is a hair behind the
+/// surface, the inside of a solid, and a few rays decided. Ambiguous parts
+/// (their vote undecided) get the same treatment; closed parts and the
+/// surfaces under the parts keep their decision.
+fn lying_on(
+    bvh: &Bvh,
+    comp: &[usize],
+    comps: &[Vec<FaceId>],
+    samples: &[Option<Sample>],
+    decisions: Vec<(i32, Reason)>,
+    opts: &Options,
+) -> Vec<(i32, Reason)> {
+    let area: Vec<f64> = comps
+        .iter()
+        .map(|m| {
+            m.iter()
+                .filter_map(|f| samples[f.idx()].as_ref())
+                .map(|s| s.area)
+                .sum()
+        })
+        .collect();
+    let cos26 = 26f64.to_radians().cos();
+    let overrides: Vec<Option<i32>> = comps
+        .par_iter()
+        .enumerate()
+        .map(|(c, members)| {
+            if members.is_empty()
+                || !matches!(decisions[c].1, Reason::Scene | Reason::None)
+                || area[c] <= 0.0
+            {
+                return None;
+            }
+            // Area on faces of larger decided parts, and how it agrees.
+            let (mut agree, mut against) = (0.0, 0.0);
+            for &f in members {
+                let Some(s) = &samples[f.idx()] else { continue };
+                let n = s.n.normalize_or_zero();
+                let delta = opts.eps.max(1e-12 * (1.0 + s.p.length()));
+                let w = s.area / s.spread.len() as f64;
+                for &q in &s.spread {
+                    // The faces of larger decided parts within the reach,
+                    // in planes within 26° of this one: the largest part's
+                    // (a paper under a monitor lies on the desk's top).
+                    let under = bvh
+                        .all_hits(q - n * (2.0 * delta), n, 0.0, 4.0 * delta, |id| {
+                            comp[id as usize] != c
+                        })
+                        .into_iter()
+                        .filter_map(|h| {
+                            let g = h.id as usize;
+                            let d = decisions[comp[g]].0;
+                            let gs = samples[g].as_ref()?;
+                            let ng = gs.n.normalize_or_zero() * f64::from(d);
+                            (d != 0 && area[comp[g]] > area[c] && n.dot(ng).abs() >= cos26)
+                                .then_some((area[comp[g]], comp[g], ng))
+                        })
+                        .max_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)));
+                    let Some((_, _, ng)) = under else { continue };
+                    let cos = n.dot(ng);
+                    if cos >= cos26 {
+                        agree += w;
+                    } else if cos <= -cos26 {
+                        against += w;
+                    }
+                }
+            }
+            if agree > 0.5 * area[c] {
+                Some(1)
+            } else if against > 0.5 * area[c] {
+                Some(-1)
+            } else {
+                None
+            }
+        })
+        .collect();
+    decisions
+        .into_iter()
+        .zip(overrides)
+        .map(|(d, o)| match o {
+            Some(o) => (o, Reason::Scene),
+            None => d,
+        })
+        .collect()
 }
 
 /// Joins pairs of open components that together form a closed surface:
@@ -811,12 +903,12 @@ fn decide(
     // Per face in parallel (a building floor is one component of tens of
     // thousands of faces), summed in member order: the same bytes at any
     // thread count.
-    let per_face: Vec<([f64; 2], [f64; 2])> = members
+    let per_face: Vec<([f64; 2], [f64; 2], [f64; 2])> = members
         .par_iter()
         .map(|&f| {
-            let (mut other, mut own) = ([0.0f64; 2], [0.0f64; 2]);
+            let (mut other, mut own, mut backs) = ([0.0f64; 2], [0.0f64; 2], [0.0f64; 2]);
             let Some(s) = &samples[f.idx()] else {
-                return (other, own);
+                return (other, own, backs);
             };
             // The frame of the normal's unsigned direction (its largest
             // component positive), the sides by the normal: turned over,
@@ -845,13 +937,14 @@ fn decide(
                     let dir = (frame.u * d.x + frame.v * d.y + frame.n * d.z) * (side * sgn);
                     if let Some(h) = bvh.intersect(o, dir, 0.0, f64::INFINITY, |id| id != f.0) {
                         let hit = h.id as usize;
+                        let seen = h.t * h.t * w;
                         if solids[hit] != 0
                             && let Some(hs) = &samples[hit]
                             && dir.dot(hs.n) * f64::from(solids[hit]) > 0.0
                         {
+                            backs[k] += seen;
                             continue;
                         }
-                        let seen = h.t * h.t * w;
                         if comp[h.id as usize] == c {
                             own[k] += seen;
                         } else {
@@ -860,14 +953,15 @@ fn decide(
                     }
                 }
             }
-            (other, own)
+            (other, own, backs)
         })
         .collect();
-    let (mut other, mut own) = ([0.0f64; 2], [0.0f64; 2]);
-    for (o, w) in &per_face {
+    let (mut other, mut own, mut backs) = ([0.0f64; 2], [0.0f64; 2], [0.0f64; 2]);
+    for (o, w, b) in &per_face {
         for k in 0..2 {
             other[k] += o[k];
             own[k] += w[k];
+            backs[k] += b[k];
         }
     }
     let verdict = |s: [f64; 2]| {
@@ -880,8 +974,11 @@ fn decide(
     // separate part from the outside. (Letting other components decide
     // first turned the Soda Hall floor inside out.) Own faces alone still
     // decide where nothing else is seen (a box missing a side faces inward).
+    // Where what the sides see in front of faces does not decide (a part
+    // inside a solid sees only backs from either side), the backs count.
     let all = [other[0] + own[0], other[1] + own[1]];
-    Some(match verdict(all) {
+    let with_backs = [all[0] + backs[0], all[1] + backs[1]];
+    Some(match verdict(all).or_else(|| verdict(with_backs)) {
         Some(d) => (d, Reason::Scene),
         None => (0, Reason::None),
     })
