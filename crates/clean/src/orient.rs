@@ -12,7 +12,8 @@
 //!    face, cut off from the rest of the slab box by the walls standing
 //!    flush on its edges, and the open tray of the rest.
 //! 2. Each component then gets its outside:
-//!    * a **closed** component (every edge has exactly two uses within it)
+//!    * a **closed** component (every edge of its faces has exactly two
+//!      uses among them; uses by other components do not count)
 //!      with volume faces outward (positive signed volume) like a solid object,
 //!      unless it encloses other geometry — a point of another component
 //!      (furniture, a light), a camera eye or a light bomb lies inside it (ray
@@ -25,7 +26,16 @@
 //!      other components and the component's own faces both count (a box
 //!      missing a side faces inward, a building floor faces its rooms). When the two sides differ
 //!      by less than 5% the component is *ambiguous*: it is left as it is (or
-//!      made double-sided with `double_sided_ambiguous`) and reported.
+//!      made double-sided with `double_sided_ambiguous`) and reported. The
+//!      closed components are decided first, and a ray that meets the back
+//!      of one's face sees nothing (it started inside a solid), unless the
+//!      fronts seen do not decide.
+//! 3. An open component lying on a larger one's surface (most of its sample
+//!    points within about 2 epsilon of that one's faces) faces like it.
+//!
+//! A face is sampled at points, and its rays cast in a frame, that do not
+//! depend on the way its contour runs, so ugflip run on its own output
+//! flips nothing.
 //!
 //! **Explicit operations** run after the automatic step when asked for:
 //! light bombs (every face visible from the point whose front faces away from
