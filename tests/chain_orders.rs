@@ -11,16 +11,7 @@
 //!   cuts; ugclean removes what ugflip turns and ugcopl cuts into
 //!   coincident pairs, and ugflip never removes a face.)
 
-use ugkit::run_ok;
-
-const TOOLS: [&str; 6] = [
-    "ugplanar",
-    "ugvlmerge",
-    "ugflip",
-    "ugisect",
-    "ugcopl",
-    "ugclean",
-];
+use ugkit::{CHAIN_TOOLS as TOOLS, DEFECT_KEYS, run_ok};
 
 struct Rng(u64);
 
@@ -57,26 +48,18 @@ fn run_chain(input: &[u8], order: &[&str]) -> Vec<u8> {
 fn defects(text: &[u8]) -> Vec<(String, usize)> {
     let r: serde_json::Value =
         serde_json::from_str(&run_ok("ugcheck", &["--json"], Some(text))).unwrap();
-    [
-        "nonplanar",
-        "tvertices",
-        "intersecting",
-        "overlapping",
-        "coincident",
-        "degenerate",
-        "inconsistent",
-        "nonpatch",
-    ]
-    .iter()
-    .map(|k| (k.to_string(), r[*k].as_array().unwrap().len()))
-    .filter(|(_, n)| *n > 0)
-    .collect()
+    DEFECT_KEYS
+        .iter()
+        .chain(&["nonpatch"])
+        .map(|k| (k.to_string(), r[*k].as_array().unwrap().len()))
+        .filter(|(_, n)| *n > 0)
+        .collect()
 }
 
 #[test]
 fn any_order_and_subset_runs() {
     for seed in 0..4u64 {
-        let mut r = Rng(seed * 0x9E37_79B9_7F4A_7C15 + 1);
+        let mut r = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(1));
         let input = building(seed);
         // A random subset in a random order (with repeats allowed).
         let n = 1 + r.below(6);
@@ -104,7 +87,7 @@ fn any_order_and_subset_runs() {
 #[test]
 fn orders_that_keep_the_dependencies_end_clean() {
     for seed in 0..8u64 {
-        let mut r = Rng(seed * 0x9E37_79B9_7F4A_7C15 + 7);
+        let mut r = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(7));
         let input = building(seed);
         // ugisect, ugcopl and ugflip in a random order, ugplanar anywhere
         // (or not), ugvlmerge before ugisect and ugcopl (or not), ugclean

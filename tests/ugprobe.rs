@@ -409,17 +409,7 @@ fn cornell_box_through_the_chain_is_within_two_percent_rms_of_ugprobe() {
     let lit = run_ok("ugrad", &["-q"], Some(&patches));
     // The reference is estimated on the cleaned model (the same surfaces,
     // uncut): ugprobe reads faces as ugrad does.
-    let mut cleaned = model;
-    for tool in [
-        "ugplanar",
-        "ugvlmerge",
-        "ugflip",
-        "ugisect",
-        "ugcopl",
-        "ugclean",
-    ] {
-        cleaned = run_ok(tool, &["-q"], Some(&cleaned)).into_bytes();
-    }
+    let cleaned = ugkit::chain(&model);
     let dir = tempfile::tempdir().unwrap();
     let lit = write(&dir, "lit.ug", &lit);
     let clean = write(&dir, "clean.ug", std::str::from_utf8(&cleaned).unwrap());

@@ -97,20 +97,21 @@ pub fn pipe(input: &[u8], stages: &[(&str, &[&str])]) -> Vec<u8> {
     data
 }
 
+/// The cleaning tools in the recommended order.
+pub const CHAIN_TOOLS: [&str; 6] = [
+    "ugplanar",
+    "ugvlmerge",
+    "ugflip",
+    "ugisect",
+    "ugcopl",
+    "ugclean",
+];
+
 /// The recommended cleaning chain on a model, each stage asserted to
 /// succeed: ugplanar | ugvlmerge | ugflip | ugisect | ugcopl | ugclean.
 pub fn chain(input: &[u8]) -> Vec<u8> {
-    pipe(
-        input,
-        &[
-            ("ugplanar", &[]),
-            ("ugvlmerge", &[]),
-            ("ugflip", &[]),
-            ("ugisect", &[]),
-            ("ugcopl", &[]),
-            ("ugclean", &[]),
-        ],
-    )
+    let stages: Vec<(&str, &[&str])> = CHAIN_TOOLS.iter().map(|t| (*t, &[][..])).collect();
+    pipe(input, &stages)
 }
 
 /// The recommended cleaning chain and `ugcut -l LEN` on a model, each
