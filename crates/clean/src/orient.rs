@@ -301,7 +301,6 @@ pub fn orient(model: Model, opts: &Options) -> Result<(Model, Report), UnknownFa
                 mesh.flip_face(f);
             }
         }
-        let uses = (!ghosts.is_empty()).then(|| edge_uses(&work));
         for (g, o, welded) in ghosts {
             // The reversed twin that `--double-sided` added (`NAME.back`)
             // stays reversed: ugflip run again keeps its own output.
@@ -311,10 +310,7 @@ pub fn orient(model: Model, opts: &Options) -> Result<(Model, Report), UnknownFa
             {
                 continue;
             }
-            let turn = match uses
-                .as_ref()
-                .and_then(|u| own_surface(u, &work, &welded, o))
-            {
+            let turn = match own_surface(&work, &welded, o) {
                 Some(flip) => flip,
                 None => matches!(
                     (mesh.face_normal(g), mesh.face_normal(o)),
@@ -383,29 +379,6 @@ pub fn orient(model: Model, opts: &Options) -> Result<(Model, Report), UnknownFa
     Ok((mesh.into_model(), rep))
 }
 
-/// Automatic orientation (on `mesh`, in place); returns the faces of
-/// ambiguous components and the faces flipped.
-/// Every contour edge's uses (welded vertex pair, lower first) by live
-/// faces: the face and whether it walks the edge from the lower vertex.
-type EdgeUses = rustc_hash::FxHashMap<(ug::VertexId, ug::VertexId), Vec<(FaceId, bool)>>;
-
-fn edge_uses(mesh: &Mesh) -> EdgeUses {
-    let mut uses = EdgeUses::default();
-    for f in mesh.faces() {
-        for c in &mesh.face(f).contours {
-            for (i, &a) in c.iter().enumerate() {
-                let b = c[(i + 1) % c.len()];
-                if a != b {
-                    uses.entry((a.min(b), a.max(b)))
-                        .or_default()
-                        .push((f, a < b));
-                }
-            }
-        }
-    }
-    uses
-}
-
 /// How a duplicate face (`ghost`, its welded contours as given) should
 /// face by its own surface: the faces of its material that share its edges
 /// (but its twin), as the automatic step oriented them. `Some(true)` when
@@ -416,22 +389,21 @@ fn edge_uses(mesh: &Mesh) -> EdgeUses {
 /// removes it), but two surfaces of different materials that meet back to
 /// back (ugcopl's pieces where a mullion's side lies on a wall, in Soda
 /// Hall) each keep facing their own way.
-fn own_surface(uses: &EdgeUses, work: &Mesh, ghost: &Face, twin: FaceId) -> Option<bool> {
+fn own_surface(work: &Mesh, ghost: &Face, twin: FaceId) -> Option<bool> {
     let (mut same, mut other) = (0usize, 0usize);
     for c in &ghost.contours {
         for (i, &a) in c.iter().enumerate() {
             let b = c[(i + 1) % c.len()];
-            if a == b {
-                continue;
-            }
-            let Some(list) = uses.get(&(a.min(b), a.max(b))) else {
+            let Some(e) = work.edge_between(a, b) else {
                 continue;
             };
-            for &(h, from_low) in list {
-                if h == twin || work.face(h).material != ghost.material {
+            let edge = work.edge(e);
+            let forward = edge.v[0] == a;
+            for u in &edge.uses {
+                if u.face == twin || work.face(u.face).material != ghost.material {
                     continue;
                 }
-                if from_low == (a < b) {
+                if u.forward == forward {
                     same += 1;
                 } else {
                     other += 1;
@@ -446,6 +418,8 @@ fn own_surface(uses: &EdgeUses, work: &Mesh, ghost: &Face, twin: FaceId) -> Opti
     }
 }
 
+/// Automatic orientation (on `mesh`, in place); returns the faces of
+/// ambiguous components and the faces flipped.
 fn automatic(
     mesh: &mut Mesh,
     opts: &Options,
@@ -923,17 +897,16 @@ fn decide(
             // The frame of the normal's unsigned direction (its largest
             // component positive), the sides by the normal: turned over,
             // the face casts the same rays from each side.
-            let big = s.n.abs().max_element();
-            let nc = if s.n.x.abs() == big && s.n.x < 0.0
-                || s.n.x.abs() != big && s.n.y.abs() == big && s.n.y < 0.0
-                || s.n.x.abs() != big && s.n.y.abs() != big && s.n.z < 0.0
-            {
-                -s.n
+            let a = s.n.abs();
+            let lead = if a.x >= a.y && a.x >= a.z {
+                s.n.x
+            } else if a.y >= a.z {
+                s.n.y
             } else {
-                s.n
+                s.n.z
             };
-            let sgn = if nc == s.n { 1.0 } else { -1.0 };
-            let frame = Frame::new(s.p, nc);
+            let sgn = if lead < 0.0 { -1.0 } else { 1.0 };
+            let frame = Frame::new(s.p, s.n * sgn);
             // Epsilon off the face, and (far from the origin) at least
             // 1e-12 of the distance, a thousand times the rounding of the
             // point there. (1e-9 of it was 4 mm on a site 4·10⁶ m away:
@@ -955,7 +928,7 @@ fn decide(
                             backs[k] += seen;
                             continue;
                         }
-                        if comp[h.id as usize] == c {
+                        if comp[hit] == c {
                             own[k] += seen;
                         } else {
                             other[k] += seen;
