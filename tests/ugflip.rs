@@ -347,13 +347,7 @@ fn slabs_under_flush_walls_face_outward() {
             .iter()
             .flat_map(|&f| m.face(f).contours[0].iter().map(|&v| m.pos(v)))
             .collect();
-        let (lo, hi) = pts.iter().fold(
-            (
-                geom::DVec3::splat(f64::INFINITY),
-                geom::DVec3::splat(f64::NEG_INFINITY),
-            ),
-            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-        );
+        let (lo, hi) = geom::index::bbox(pts.iter().copied(), 0.0);
         let centre = (lo + hi) / 2.0;
         for &f in faces {
             let name = m.face(f).name.clone().unwrap();
