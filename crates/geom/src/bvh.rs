@@ -1236,7 +1236,7 @@ impl Shaft {
 #[derive(Clone, Copy, Debug)]
 pub struct ShaftTri {
     pub k: u32,
-    n: [f32; 3],
+    n: glam::Vec3,
     d: f64,
     /// A point farther than this from the plane (`|n·y − d|`) is off it.
     slack: f64,
@@ -1244,9 +1244,8 @@ pub struct ShaftTri {
 
 impl ShaftTri {
     fn new(k: u32, p: &[DVec3; 3], tol: f64) -> ShaftTri {
-        let exact = (p[1] - p[0]).cross(p[2] - p[0]);
-        let n32 = exact.as_vec3().to_array();
-        let n = DVec3::new(f64::from(n32[0]), f64::from(n32[1]), f64::from(n32[2]));
+        let n32 = (p[1] - p[0]).cross(p[2] - p[0]).as_vec3();
+        let n = n32.as_dvec3();
         let d = n.dot(p[0]);
         // The corners' own distance from the plane (rounding, and the
         // normal's), and rounding of a test point's.
@@ -1263,11 +1262,7 @@ impl ShaftTri {
     /// plane (both ends beyond it on one side, by more than the slack).
     #[inline]
     pub fn may_cross(&self, a: DVec3, b: DVec3) -> bool {
-        let n = DVec3::new(
-            f64::from(self.n[0]),
-            f64::from(self.n[1]),
-            f64::from(self.n[2]),
-        );
+        let n = self.n.as_dvec3();
         let (x, y) = (n.dot(a) - self.d, n.dot(b) - self.d);
         !((x > self.slack && y > self.slack) || (x < -self.slack && y < -self.slack))
     }
