@@ -408,6 +408,19 @@ fn one_moved(seed: u64, moves: Moves) -> Vec<String> {
     let (oriented, _) = clean::orient::orient(grouped.clone(), &opts).expect("oriented");
     let (cut, _) = clean::isect::isect(&oriented, eps).expect("isect");
     let (copl, _) = clean::copl::copl(&cut, eps).expect("copl");
+    // (With `UG_DUMP=DIR`, the chain's stages too, as DIR/SEED.STAGE.ug,
+    // to run the next tool's binary on what the library calls made.)
+    if let Ok(dir) = std::env::var("UG_DUMP") {
+        for (stage, model) in [
+            ("grouped", &grouped),
+            ("oriented", &oriented),
+            ("isect", &cut),
+            ("copl", &copl),
+        ] {
+            std::fs::write(format!("{dir}/{seed}.{stage}.ug"), ug::write_string(model))
+                .expect("UG_DUMP");
+        }
+    }
     let (coincident, _) = clean::coincident::clean(&copl, eps);
     // (ugclean's last step, the tents, applies with or without the
     // enclosed faces' removal.)

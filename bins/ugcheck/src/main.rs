@@ -66,7 +66,7 @@ fn main() -> std::process::ExitCode {
             match chosen.source {
                 cli::Source::Explicit => "",
                 cli::Source::Relative => " (model-relative)",
-                cli::Source::Precision => " (twice the precision the coordinates are written with)",
+                cli::Source::Precision => " (from the precision the coordinates are written with)",
                 cli::Source::Carried => " (carried from an earlier tool: {ugkit epsilon})",
             }
         ));

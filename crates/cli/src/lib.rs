@@ -167,7 +167,7 @@ impl Common {
     pub fn note_precision(&self, e: f64) {
         if !self.quiet {
             eprintln!(
-                "note: epsilon {e:e}, twice the precision the coordinates are written with: faces turned off the axes are bent by that rounding (the default would be 1e-6 of the model's size; -e sets it)"
+                "note: epsilon {e:e}, {PRECISION_FACTOR} times the precision the coordinates are written with: faces turned off the axes are bent or moved by that rounding (the default would be 1e-6 of the model's size; -e sets it)"
             );
         }
     }
@@ -430,8 +430,14 @@ pub fn carry_epsilon(m: &mut ug::Model, e: f64) {
 /// point lies up to 0.87 q from where it was meant, a rounded edge's ends
 /// as much, so a point meant to lie on an edge may lie 1.7 q from it (at
 /// q itself, tilted buildings rounded to 4 decimals kept T-vertices on 12
-/// of 60 seeds; docs/decisions.md).
-pub const PRECISION_FACTOR: f64 = 2.0;
+/// of 60 seeds; docs/decisions.md). Not a whole number: between rounded
+/// points the distances along an axis are whole multiples of q, and at an
+/// epsilon of exactly 2q two faces 2q apart were within epsilon for one
+/// test and beyond it for the next, by the last bit (a pier's bottom and
+/// a wall's 0.2 mm apart at 4 decimals: an inconsistent edge). No sum of
+/// three squared whole numbers is 2.1², so no distance between rounded
+/// points is ever exactly 2.1 q.
+pub const PRECISION_FACTOR: f64 = 2.1;
 
 /// At most this many times the relative epsilon is taken from the input's
 /// precision ([`precision_epsilon`]): an epsilon of at most 2e-3 of the
@@ -442,20 +448,28 @@ pub const PRECISION_FACTOR: f64 = 2.0;
 /// if a face is bent by at most 2 units (docs/decisions.md).
 pub const PRECISION_LIMIT: f64 = 1000.0;
 
-/// Twice the precision the model's coordinates were written with, as an
-/// epsilon ([`PRECISION_FACTOR`]), where it is what bends its faces: the
+/// At most this many times the relative epsilon is taken from the input's
+/// precision where no face is bent but some face is oblique (its normal
+/// along no axis): metres to 4 decimals on a building from 1 m across,
+/// whole millimetres from 10 m across (docs/decisions.md).
+pub const OBLIQUE_LIMIT: f64 = 100.0;
+
+/// 2.1 times the precision the model's coordinates were written with, as
+/// an epsilon ([`PRECISION_FACTOR`]), where the rounding matters: the
 /// coarsest power of ten q that every coordinate is a whole multiple of,
 /// when q is more than `relative` (and at most [`PRECISION_LIMIT`] times
 /// it) and some face is bent out of its plane by more than `relative` and
 /// at most 2q, or two faces on one edge are (a face of one lies that far
-/// from the other's plane: a polygon exported as triangles). An export
+/// from the other's plane: a polygon exported as triangles), or (q at
+/// most [`OBLIQUE_LIMIT`] times `relative`) some face is oblique. An export
 /// rounded to 4 decimals (0.1 mm, as Revit writes metres) whose
 /// walls are turned off the axes has faces bent by up to that rounding,
 /// a few times the relative epsilon of a 20 m building; at the relative
 /// epsilon the chain cut such faces into hundreds of pieces and still
 /// left defects (a helper's exports, 2026-12-06: 4 faces → 1,118), at q
-/// it leaves a few clean pieces. A model whose faces are flat (or bent by
-/// more than the rounding explains) keeps the relative epsilon.
+/// it leaves a few clean pieces. A model whose faces are flat and along
+/// the axes (or bent by more than the rounding explains) keeps the
+/// relative epsilon.
 pub fn precision_epsilon(m: &ug::Model, relative: f64) -> Option<f64> {
     if relative.is_nan() || relative <= 0.0 {
         return None;
@@ -489,6 +503,17 @@ pub fn precision_epsilon(m: &ug::Model, relative: f64) -> Option<f64> {
         .map(|f| geom::Plane::face_deviation(f))
         .collect();
     if fits.iter().flatten().any(|&(d, _)| explained(d)) {
+        return Some(PRECISION_FACTOR * q);
+    }
+    // Or flat faces of which some are oblique: walls turned about the
+    // vertical only stay flat when rounded (a wall's top and bottom
+    // corners round alike), but their corners move in the plan, and where
+    // other things meet them (a vault's edge meant to lie on the wall, a
+    // wall's end on the next) they miss by up to q, several times the
+    // relative epsilon (property seeds at 4 decimals with oblique wings:
+    // 6 of 200 kept defects, 1 now). Faces along the axes round exactly.
+    let oblique = |n: geom::DVec3| n.to_array().iter().filter(|c| c.abs() > 1e-6).count() > 1;
+    if q <= OBLIQUE_LIMIT * relative && fits.iter().flatten().any(|&(_, pl)| oblique(pl.n)) {
         return Some(PRECISION_FACTOR * q);
     }
     // Or two faces on one edge (by position: an export may give each face
@@ -557,7 +582,7 @@ mod tests {
         let (bend, _) = geom::Plane::face_deviation(&[m_face(&m, 0)]).unwrap();
         assert!(bend > relative_epsilon(&m) && bend < 2e-4, "{bend}");
         assert_eq!(e.source, Source::Precision);
-        assert_eq!(e.value, 2e-4);
+        assert_eq!(e.value, PRECISION_FACTOR * 1e-4);
         // `-e` wins; a carried comment is used as it is.
         assert_eq!(epsilon(Some(0.5), &m), 0.5);
         let mut c = m.clone();
@@ -573,7 +598,7 @@ mod tests {
              f t1 (a b c); f t2 (a2 c2 d);",
         );
         assert_eq!(choose_epsilon(None, &soup).source, Source::Precision);
-        assert_eq!(choose_epsilon(None, &soup).value, 2e-4);
+        assert_eq!(choose_epsilon(None, &soup).value, PRECISION_FACTOR * 1e-4);
         // Rounded to 1 mm (whole millimetres, written in metres) on a 7.8 m
         // model: q is 129 times the relative epsilon, within the limit.
         let mm = model(
@@ -583,7 +608,35 @@ mod tests {
         let (bend, _) = geom::Plane::face_deviation(&[m_face(&mm, 0)]).unwrap();
         assert!(bend > relative_epsilon(&mm) && bend < 2e-3, "{bend}");
         assert_eq!(choose_epsilon(None, &mm).source, Source::Precision);
-        assert_eq!(choose_epsilon(None, &mm).value, 2e-3);
+        assert_eq!(choose_epsilon(None, &mm).value, PRECISION_FACTOR * 1e-3);
+    }
+
+    /// Walls turned about the vertical only, rounded to 4 decimals: every
+    /// face flat, but oblique, so the rounding moved their corners in the
+    /// plan; q is taken. Along the axes, or with q beyond
+    /// [`OBLIQUE_LIMIT`] times the relative epsilon, it is not.
+    #[test]
+    fn the_precision_of_flat_oblique_faces_is_the_epsilon() {
+        let turned = model(
+            "v a 0 0 0; v b 3.4641 2 0; v c 3.4641 2 2.8; v d 0 0 2.8; f w (a b c d); \
+             v e 4.4641 0.2679 0; v f 4.4641 0.2679 2.8; f x (b e f c);",
+        );
+        let (bend, _) = geom::Plane::face_deviation(&[m_face(&turned, 0)]).unwrap();
+        assert!(bend < 1e-15, "{bend}");
+        let e = choose_epsilon(None, &turned);
+        assert_eq!(e.source, Source::Precision);
+        assert_eq!(e.value, PRECISION_FACTOR * 1e-4);
+        // The same walls along the axes: rounding moved nothing.
+        let square = model(
+            "v a 0 0 0; v b 4 0 0; v c 4 0 2.8; v d 0 0 2.8; f w (a b c d); \
+             v e 4 1.7321 0; v f 4 1.7321 2.8; f x (b e f c);",
+        );
+        assert_eq!(choose_epsilon(None, &square).source, Source::Relative);
+        // In whole millimetres but 2 m across: q is 200 times the relative
+        // epsilon; only a bend could explain it.
+        let small = model("v a 0 0 0; v b 1.732 1 0; v c 1.732 1 0.5; v d 0 0 0.5; f w (a b c d);");
+        assert!(1e-3 > OBLIQUE_LIMIT * relative_epsilon(&small));
+        assert_eq!(choose_epsilon(None, &small).source, Source::Relative);
     }
 
     fn m_face(m: &ug::Model, k: usize) -> Vec<geom::DVec3> {
