@@ -670,7 +670,8 @@ fn dirty_buildings_placed_on_a_site() {
 /// with `UG_TILT=1` every building turned about an oblique axis ([`tilt`]),
 /// with `UG_SHUFFLE=1` written in another order ([`shuffle`]), with
 /// `UG_ROUND=K` every coordinate rounded to K decimals last; `UG_DUMP=DIR`
-/// writes each seed's model, as moved, to DIR/SEED.ug.
+/// writes each seed's model, as moved, to DIR/SEED.ug, and the chain's
+/// stages to DIR/SEED.STAGE.ug.
 #[test]
 #[ignore]
 fn more_seeds() {
