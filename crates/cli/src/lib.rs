@@ -457,8 +457,8 @@ pub const OBLIQUE_LIMIT: f64 = 100.0;
 /// 2.1 times the precision the model's coordinates were written with, as
 /// an epsilon ([`PRECISION_FACTOR`]), where the rounding matters: the
 /// coarsest power of ten q that every coordinate is a whole multiple of,
-/// when q is more than `relative` (and at most [`PRECISION_LIMIT`] times
-/// it) and some face is bent out of its plane by more than `relative` and
+/// when 2.1 q is more than `relative` (and q at most [`PRECISION_LIMIT`]
+/// times it) and some face is bent out of its plane by more than `relative` and
 /// at most 2q, or two faces on one edge are (a face of one lies that far
 /// from the other's plane: a polygon exported as triangles), or (q at
 /// most [`OBLIQUE_LIMIT`] times `relative`) some face is oblique. An export
@@ -475,9 +475,12 @@ pub fn precision_epsilon(m: &ug::Model, relative: f64) -> Option<f64> {
         return None;
     }
     m.top_vertices().nth(2)?;
-    // Powers of ten above `relative`, up to PRECISION_LIMIT times it,
-    // coarsest first.
-    let lo = relative.log10().floor() as i32 + 1;
+    // Powers of ten q with PRECISION_FACTOR·q above `relative`, up to
+    // PRECISION_LIMIT times it, coarsest first. (A q a little under the
+    // relative epsilon moves points by most of it: 5 decimals on a
+    // building of 11.5 m diagonal, q = 0.87 relative, failed 3 of 200
+    // property seeds by orientation.)
+    let lo = (relative / PRECISION_FACTOR).log10().floor() as i32 + 1;
     let hi = (relative * PRECISION_LIMIT).log10().floor() as i32;
     let whole = |k: i32| {
         let scale = 10f64.powi(-k);
@@ -637,6 +640,24 @@ mod tests {
         let small = model("v a 0 0 0; v b 1.732 1 0; v c 1.732 1 0.5; v d 0 0 0.5; f w (a b c d);");
         assert!(1e-3 > OBLIQUE_LIMIT * relative_epsilon(&small));
         assert_eq!(choose_epsilon(None, &small).source, Source::Relative);
+        // 5 decimals on a 12 m model: q is under the relative epsilon
+        // (1.2e-5) but moves points by most of it; 2.1 q is above it.
+        let fine = model(
+            "v a 0 0 0; v b 10.39231 6.00001 0; v c 10.39231 6.00001 2.8; v d 0 0 2.8; \
+             f w (a b c d);",
+        );
+        let relative = relative_epsilon(&fine);
+        assert!(
+            1e-5 < relative && PRECISION_FACTOR * 1e-5 > relative,
+            "{relative}"
+        );
+        assert_eq!(choose_epsilon(None, &fine).value, PRECISION_FACTOR * 1e-5);
+        // 6 decimals there: 2.1 q is under it, the relative epsilon stays.
+        let finer = model(
+            "v a 0 0 0; v b 10.392305 6.000001 0; v c 10.392305 6.000001 2.8; v d 0 0 2.8; \
+             f w (a b c d);",
+        );
+        assert_eq!(choose_epsilon(None, &finer).source, Source::Relative);
     }
 
     fn m_face(m: &ug::Model, k: usize) -> Vec<geom::DVec3> {
