@@ -169,7 +169,7 @@ mod write;
 mod tests;
 
 pub use build::{BuildError, not_patches};
-pub use write::{VertexColours, write_in_parallel};
+pub use write::{VertexColours, write_in_parallel, write_in_parallel_by};
 
 macro_rules! id_type {
     ($(#[$m:meta])* $name:ident) => {
