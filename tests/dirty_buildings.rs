@@ -174,6 +174,25 @@ fn ugflip_orients_the_same_before_and_after_the_grouper() {
     }
 }
 
+/// The cleaning chain on `input` without `-e`: its first tool must take
+/// `epsilon` from the input's precision and say so; then the stages
+/// `more` (ugcut, say). The output.
+fn chain_without_e(input: &[u8], epsilon: &str, more: &[(&str, &[&str])]) -> Vec<u8> {
+    let first = run("ugplanar", &[], Some(input));
+    assert!(first.status.success());
+    let note = String::from_utf8_lossy(&first.stderr);
+    assert!(note.contains(&format!("epsilon {epsilon}")), "{note}");
+    let mut stages: Vec<(&str, &[&str])> = vec![
+        ("ugvlmerge", &["-q"]),
+        ("ugflip", &["-q"]),
+        ("ugisect", &["-q"]),
+        ("ugcopl", &["-q"]),
+        ("ugclean", &["-q"]),
+    ];
+    stages.extend_from_slice(more);
+    pipe(&first.stdout, &stages)
+}
+
 /// A slab and three walls exported as Revit writes metres: georeferenced,
 /// turned about all three axes, rounded to 4 decimals
 /// (fixtures/clean/rounded-turned-slab-and-walls.ug). The rounding bends
@@ -185,18 +204,7 @@ fn ugflip_orients_the_same_before_and_after_the_grouper() {
 #[test]
 fn an_export_rounded_to_its_precision_is_cleaned_at_that_precision() {
     let input = std::fs::read(ugkit::fixture("clean/rounded-turned-slab-and-walls.ug")).unwrap();
-    let first = run("ugplanar", &[], Some(&input));
-    assert!(first.status.success());
-    let note = String::from_utf8_lossy(&first.stderr);
-    assert!(note.contains("epsilon 2.1e-4"), "{note}");
-    let stages: Vec<(&str, &[&str])> = vec![
-        ("ugvlmerge", &["-q"]),
-        ("ugflip", &["-q"]),
-        ("ugisect", &["-q"]),
-        ("ugcopl", &["-q"]),
-        ("ugclean", &["-q"]),
-    ];
-    let out = pipe(&first.stdout, &stages);
+    let out = chain_without_e(&input, "2.1e-4", &[]);
     let text = String::from_utf8_lossy(&out);
     assert!(text.starts_with("{ugkit epsilon 2.1e-4}"), "{text}");
     let r = check(&out);
@@ -224,19 +232,7 @@ fn flat_oblique_faces_rounded_are_cleaned_at_their_precision() {
         "clean/vault-edge-on-a-turned-wall-rounded.ug",
     ))
     .unwrap();
-    let first = run("ugplanar", &[], Some(&input));
-    assert!(first.status.success());
-    let note = String::from_utf8_lossy(&first.stderr);
-    assert!(note.contains("epsilon 2.1e-4"), "{note}");
-    let stages: Vec<(&str, &[&str])> = vec![
-        ("ugvlmerge", &["-q"]),
-        ("ugflip", &["-q"]),
-        ("ugisect", &["-q"]),
-        ("ugcopl", &["-q"]),
-        ("ugclean", &["-q"]),
-        ("ugcut", &["-q", "-l", "0.7"]),
-    ];
-    let out = pipe(&first.stdout, &stages);
+    let out = chain_without_e(&input, "2.1e-4", &[("ugcut", &["-q", "-l", "0.7"])]);
     let r = check(&out);
     assert_eq!(r["epsilon"].as_f64(), Some(2.1e-4), "{}", r["epsilon"]);
     for key in ugkit::DEFECT_KEYS {
