@@ -182,15 +182,31 @@ fn chain_without_e(input: &[u8], epsilon: &str, more: &[(&str, &[&str])]) -> Vec
     assert!(first.status.success());
     let note = String::from_utf8_lossy(&first.stderr);
     assert!(note.contains(&format!("epsilon {epsilon}")), "{note}");
-    let mut stages: Vec<(&str, &[&str])> = vec![
-        ("ugvlmerge", &["-q"]),
-        ("ugflip", &["-q"]),
-        ("ugisect", &["-q"]),
-        ("ugcopl", &["-q"]),
-        ("ugclean", &["-q"]),
-    ];
+    let mut stages: Vec<(&str, &[&str])> = ugkit::CHAIN_TOOLS[1..]
+        .iter()
+        .map(|&t| (t, &["-q"][..]))
+        .collect();
     stages.extend_from_slice(more);
     pipe(&first.stdout, &stages)
+}
+
+/// The cleaning chain on `input` at `-e E` (ugclean also given `clean`),
+/// then the stages `more`; ugcheck's report at E.
+fn checked_chain_at(
+    input: &[u8],
+    e: &str,
+    clean: &[&str],
+    more: &[(&str, &[&str])],
+) -> serde_json::Value {
+    let a = ["-q", "-e", e];
+    let c: Vec<&str> = a.iter().chain(clean).copied().collect();
+    let mut stages: Vec<(&str, &[&str])> = ugkit::CHAIN_TOOLS
+        .iter()
+        .map(|&t| (t, if t == "ugclean" { &c[..] } else { &a[..] }))
+        .collect();
+    stages.extend_from_slice(more);
+    let out = pipe(input, &stages);
+    serde_json::from_str(&run_ok("ugcheck", &["--json", "-e", e], Some(&out))).unwrap()
 }
 
 /// A slab and three walls exported as Revit writes metres: georeferenced,
@@ -241,24 +257,12 @@ fn flat_oblique_faces_rounded_are_cleaned_at_their_precision() {
     assert_eq!(count(&r, "nonpatch"), 0, "{}", r["nonpatch"]);
     // At the relative epsilon the same chain leaves the crossing: the
     // fixture still shows what the precision fixes.
-    let e = ["-q", "-e", "5.721e-6"];
-    let at_relative: Vec<(&str, &[&str])> = vec![
-        ("ugplanar", &e),
-        ("ugvlmerge", &e),
-        ("ugflip", &e),
-        ("ugisect", &e),
-        ("ugcopl", &e),
-        ("ugclean", &e),
-        ("ugcut", &["-q", "-e", "5.721e-6", "-l", "0.7"]),
-    ];
-    let out = pipe(&input, &at_relative);
-    let text = String::from_utf8_lossy(&out);
-    let r: serde_json::Value = serde_json::from_str(&run_ok(
-        "ugcheck",
-        &["--json", "-e", "5.721e-6"],
-        Some(text.as_bytes()),
-    ))
-    .unwrap();
+    let r = checked_chain_at(
+        &input,
+        "5.721e-6",
+        &[],
+        &[("ugcut", &["-q", "-e", "5.721e-6", "-l", "0.7"])],
+    );
     assert!(count(&r, "intersecting") > 0, "{}", r["intersecting"]);
 }
 
@@ -277,19 +281,8 @@ fn faces_twice_the_precision_apart_are_no_tie() {
     ))
     .unwrap();
     let chain_at = |e: &str, keep: bool| {
-        let a = ["-q", "-e", e];
-        let k = ["-q", "-e", e, "--keep-enclosed"];
-        let stages: Vec<(&str, &[&str])> = vec![
-            ("ugplanar", &a),
-            ("ugvlmerge", &a),
-            ("ugflip", &a),
-            ("ugisect", &a),
-            ("ugcopl", &a),
-            ("ugclean", if keep { &k } else { &a }),
-        ];
-        let out = pipe(&input, &stages);
-        let r: serde_json::Value =
-            serde_json::from_str(&run_ok("ugcheck", &["--json", "-e", e], Some(&out))).unwrap();
+        let clean: &[&str] = if keep { &["--keep-enclosed"] } else { &[] };
+        let r = checked_chain_at(&input, e, clean, &[]);
         ugkit::DEFECT_KEYS
             .iter()
             .map(|k| count(&r, k))

@@ -606,7 +606,7 @@ fn automatic(
 }
 
 /// Open parts that lie on another, larger part's surface (most of their
-/// area within about epsilon of its faces, on planes within 26°: a rug on
+/// area within about 2 epsilon of its faces, on planes within 26°: a rug on
 /// a floor, a paper on a desk, a picture on a wall, a cap's copy fanned
 /// the other way on the cap) face the way that surface faces, whatever
 /// their own vote said: from a sheet on a surface one side sees almost

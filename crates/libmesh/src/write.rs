@@ -364,12 +364,12 @@ impl Mesh {
         let pieces_of = |p: PatchId, pieces: &mut Vec<VertId>, ends: &mut Vec<usize>| {
             pieces.clear();
             ends.clear();
-            for e in self.patch_leaves(p) {
+            self.for_each_patch_leaf(p, |e| {
                 self.for_each_anchored(e, |q| {
                     pieces.extend_from_slice(q);
                     ends.push(pieces.len());
                 });
-            }
+            });
         };
         let np = self.patches.len();
         // The input's face and wire names `PREFIX.k` (k as written: no
@@ -434,7 +434,11 @@ impl Mesh {
         // A line a leaf (about: an anchored leaf may write more pieces).
         let leaves: Vec<u32> = (0..np)
             .into_par_iter()
-            .map(|p| self.patch_leaves(PatchId(p as u32)).len() as u32)
+            .map(|p| {
+                let mut k = 0u32;
+                self.for_each_patch_leaf(PatchId(p as u32), |_| k += 1);
+                k
+            })
             .collect();
         write_in_parallel_by(
             &mut out,
