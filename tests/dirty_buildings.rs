@@ -293,3 +293,47 @@ fn faces_twice_the_precision_apart_are_no_tie() {
     assert_eq!(chain_at(&e, true), 0);
     assert!(chain_at("2e-4", false) > 0);
 }
+
+/// A pier's end edge 0.9986 epsilon in front of an oblique wing facade at
+/// 48°, reaching past the facade's foot and top
+/// (fixtures/clean/pier-edge-within-epsilon-of-an-oblique-facade.ug, from
+/// property seed 170098 at `UG_ROUND=3`, epsilon 2.1 mm). The planes'
+/// line runs 1.34 epsilon outside the pier, and the pair once read as
+/// disjoint: nothing was cut, and `ugcut`'s vertices on the pier's edge,
+/// within epsilon of the facade's interior, made 7 intersecting pairs.
+/// Now the two meet along the edge: the facade is cut there, in two
+/// pieces that share the edge's stretch between its foot and top with the
+/// pier, and the patches are clean.
+#[test]
+fn an_edge_within_epsilon_of_an_oblique_facade_cuts_it() {
+    let input = std::fs::read(ugkit::fixture(
+        "clean/pier-edge-within-epsilon-of-an-oblique-facade.ug",
+    ))
+    .unwrap();
+    let a = ["-q", "-e", "2.1e-3"];
+    let stages: Vec<(&str, &[&str])> = ugkit::CHAIN_TOOLS.iter().map(|&t| (t, &a[..])).collect();
+    let cleaned = ug::parse(&pipe(&input, &stages), "<chain>").unwrap().model;
+    let on_edge = |v: &ug::VertexId| {
+        let p = cleaned.vertices[v.idx()].pos;
+        (p.x - 3.471).abs() < 1e-9 && (p.y - 0.125).abs() < 1e-9
+    };
+    let facade: Vec<&ug::Face> = cleaned
+        .faces
+        .iter()
+        .filter(|f| f.name.as_deref().is_some_and(|n| n.starts_with("wing0.2")))
+        .collect();
+    assert_eq!(facade.len(), 2);
+    for f in &facade {
+        assert_eq!(f.contours[0].iter().filter(|v| on_edge(v)).count(), 2);
+    }
+    let r = checked_chain_at(
+        &input,
+        "2.1e-3",
+        &[],
+        &[("ugcut", &["-q", "-e", "2.1e-3", "-l", "0.7"])],
+    );
+    for key in ugkit::DEFECT_KEYS {
+        assert_eq!(count(&r, key), 0, "{key}: {}", r[key]);
+    }
+    assert_eq!(count(&r, "nonpatch"), 0, "{}", r["nonpatch"]);
+}

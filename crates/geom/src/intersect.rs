@@ -632,7 +632,48 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
     // end points in one order, so the faces that share the edge find the
     // same point.
     let mut ev: Vec<(f64, DVec3, DVec3)> = Vec::new();
-    for (g, other, edges) in [(a, b, &ea), (b, a, &eb)] {
+    // At a steep angle, each face's edges lying in the other's plane (both
+    // ends within epsilon of it), as (t, point) at either end: where the
+    // other face's boundary crosses this face's plane *outside* this face
+    // but along such an edge, the two meet on the edge, not on the planes'
+    // line (see below).
+    let lying = |g: &FaceGeom, other: &FaceGeom, edges: &[(u32, u32)]| {
+        let mut out: Vec<((f64, DVec3), (f64, DVec3))> = Vec::new();
+        if !steep {
+            return out;
+        }
+        for &(ci, i) in edges {
+            let c = &g.contours[ci as usize];
+            let (p, q) = (c[i as usize], c[(i as usize + 1) % c.len()]);
+            if snap(other.plane.dist(p), eps) == 0.0 && snap(other.plane.dist(q), eps) == 0.0 {
+                let (tp, tq) = ((p - p0).dot(dir), (q - p0).dot(dir));
+                if (tq - tp).abs() > eps {
+                    out.push(if tp <= tq {
+                        ((tp, p), (tq, q))
+                    } else {
+                        ((tq, q), (tp, p))
+                    });
+                }
+            }
+        }
+        // Only a face that leaves the plane: one lying in it within
+        // epsilon all over (a sliver triangle of a wall's end, its
+        // corners 0 to 1 epsilon off a slab's side) has no edge of its
+        // own there, and its tilt, so the planes' line, is rounding.
+        let leaves = || {
+            g.contours
+                .iter()
+                .flatten()
+                .any(|&p| snap(other.plane.dist(p), eps) != 0.0)
+        };
+        if !out.is_empty() && !leaves() {
+            out.clear();
+        }
+        out
+    };
+    let lying_a = lying(a, b, &ea);
+    let lying_b = lying(b, a, &eb);
+    for (g, other, edges, lying_other) in [(a, b, &ea, &lying_b), (b, a, &eb, &lying_a)] {
         for &(ci, i) in edges {
             let c = &g.contours[ci as usize];
             let j = (i as usize + 1) % c.len();
@@ -656,7 +697,25 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
                     (q, p, dq, dp)
                 };
                 let x = p + (q - p) * (dp / (dp - dq));
-                ev.push(((x - p0).dot(dir), x, x));
+                let t = (x - p0).dot(dir);
+                // The crossing lies in `other`'s plane; where it is
+                // outside `other` but `other` has an edge lying in `g`'s
+                // plane across it, the faces meet on that edge: within
+                // epsilon of `g`'s plane, the edge runs up to
+                // epsilon / sin θ from the planes' line, beyond epsilon
+                // from it below 90° (a pier's edge 0.998 epsilon in front
+                // of an oblique facade at 48°, the line 1.34 epsilon
+                // outside the pier: the pair read as disjoint, and its
+                // pieces after ugcut, with vertices on that edge, as
+                // intersecting; property seed 170098 to 3 decimals). The
+                // event is tried, and a cut ends, at the edge's point.
+                let on_edge = lying_other
+                    .iter()
+                    .filter(|((t0, _), (t1, _))| t >= *t0 && t <= *t1)
+                    .map(|&((t0, e0), (t1, e1))| e0 + (e1 - e0) * ((t - t0) / (t1 - t0)))
+                    .min_by(|u, v| (*u - x).length().total_cmp(&(*v - x).length()))
+                    .filter(|_| other.locate(x, eps) == Location::Outside);
+                ev.push((t, x, on_edge.unwrap_or(x)));
             }
         }
     }
@@ -1240,5 +1299,59 @@ mod tests {
         assert_eq!(relate(&floor(), &wall, EPS), Relation::Intersect);
         assert_eq!(relate(&wall, &floor(), EPS), Relation::Intersect);
         assert_eq!(cut_segments(&floor(), &wall, EPS).len(), 1);
+    }
+
+    /// A pier's edge 0.998 epsilon in front of an oblique facade at 48°,
+    /// reaching past the facade's top and bottom (property seed 170098 to 3
+    /// decimals, eps 2.1 mm): the planes' line runs 1.34 epsilon outside
+    /// the pier, but the edge lies on the facade within epsilon, so the
+    /// two meet along it and the cut runs along the edge, from the
+    /// facade's bottom to its top. 1.5 epsilon away they are apart.
+    #[test]
+    fn an_edge_within_epsilon_of_an_oblique_face_meets_it() {
+        let eps = 0.0021;
+        let (ax, ay, bx, by) = (3.447, 0.14919534802378343, 8.708, -4.539199173695988);
+        let facade = quad([[ax, ay, 0.], [bx, by, 0.], [bx, by, 2.8], [ax, ay, 2.8]]);
+        let n = DVec2::new(by - ay, -(bx - ax)).normalize();
+        let pier = |gap: f64| {
+            // The edge's foot on the facade, 24 mm along it, moved `gap`
+            // off the facade towards the pier's side.
+            let along = DVec2::new(bx - ax, by - ay).normalize();
+            let e = DVec2::new(ax, ay) + along * 0.0241 + n * gap;
+            let (x, y) = (e.x, e.y);
+            quad([
+                [x, y - 0.25, -0.025],
+                [x, y, -0.025],
+                [x, y, 2.815],
+                [x, y - 0.25, 2.815],
+            ])
+        };
+        let near = pier(0.998 * eps);
+        // The edge 0.998 epsilon off the facade's plane, the rest of the
+        // pier far on the same side.
+        let d = |p: DVec3| facade.plane.dist(p) * facade.plane.dist(near.contours[0][1]).signum();
+        assert!((d(near.contours[0][1]) - 0.998 * eps).abs() < 1e-9);
+        assert!(d(near.contours[0][0]) > 50.0 * eps);
+        assert_eq!(relate(&facade, &near, eps), Relation::Intersect);
+        assert_eq!(relate(&near, &facade, eps), Relation::Intersect);
+        for (f, g) in [(&facade, &near), (&near, &facade)] {
+            let segs = cut_segments(f, g, eps);
+            assert_eq!(segs.len(), 1, "{segs:?}");
+            let (p, q) = segs[0];
+            let (lo, hi) = if p.z < q.z { (p, q) } else { (q, p) };
+            assert!(lo.z.abs() < eps && (hi.z - 2.8).abs() < eps, "{segs:?}");
+            // On the pier's edge, not on the planes' line.
+            let edge = near.contours[0][1];
+            for e in [lo, hi] {
+                assert!(
+                    DVec2::new(e.x - edge.x, e.y - edge.y).length() < 1e-9,
+                    "{e}"
+                );
+            }
+        }
+        let far = pier(1.5 * eps);
+        assert_eq!(relate(&facade, &far, eps), Relation::Disjoint);
+        assert_eq!(relate(&far, &facade, eps), Relation::Disjoint);
+        assert!(cut_segments(&facade, &far, eps).is_empty());
     }
 }
