@@ -1006,3 +1006,35 @@ fn a_pendant_face_grazing_a_vault_piece_is_no_intersection() {
         1e-9,
     );
 }
+
+/// A wall end's piece 118 mm long that is a thin triangle with one more
+/// vertex on its short side, the edge there 2.4 epsilon long where the
+/// piece is only 1.1 epsilon wide
+/// (fixtures/cut/short-edge-on-a-neck-under-two-epsilon-wide.ug, property
+/// seed 170842 at `UG_ROUND=3`, epsilon 2.1 mm): no point across the edge
+/// gives a triangle wider than epsilon, and ugcut wrote a triangle 0.26
+/// epsilon wide and a T-vertex. Ends of edges under 3 epsilon that no point
+/// mends are joined now (2 before): the piece becomes a needle 1.3 epsilon
+/// wide, which the repair snaps to a segment and leaves out with a
+/// warning; the other face keeps all its area.
+#[test]
+fn a_short_edge_where_nothing_fits_across_joins_under_three_epsilon() {
+    let eps = "2.1e-3";
+    let input = std::fs::read(fixture(
+        "cut/short-edge-on-a-neck-under-two-epsilon-wide.ug",
+    ))
+    .unwrap();
+    // The other face: a right triangle, legs 2.8 m and 0.247 m.
+    let kept = 0.5 * 2.8 * (3.182 - 2.934999294283698);
+    for len in ["2", "0.7", "0.3", "0.1"] {
+        let out = run("ugcut", &["-v", "-e", eps, "-l", len], Some(&input));
+        assert!(out.status.success());
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert!(err.contains("joined the ends of 1 short edges"), "{err}");
+        assert!(err.contains("face s0w3p1.3.t1.2.i1.c2: zero area"), "{err}");
+        let r = check_eps(&out.stdout, eps);
+        assert_only_sound_patches(&r, len);
+        let a = areas(&r)[0];
+        assert!((a - kept).abs() <= 1e-9 * kept, "-l {len}: {a} vs {kept}");
+    }
+}
