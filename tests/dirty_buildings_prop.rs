@@ -713,7 +713,7 @@ fn dirty_buildings_tilted_and_shuffled() {
 }
 
 /// Exports with a fixed precision: every coordinate rounded to 4 decimals
-/// (metres to 0.1 mm, as Revit writes them) or 5, the buildings not
+/// (metres to 0.1 mm, as Revit writes them), 5 or 3, the buildings not
 /// turned (walls turned in the plan only where a wing is). Before the
 /// precision epsilon took flat oblique faces into account and became 2.1
 /// times the precision (docs/decisions.md, "A rounded export's epsilon"),
@@ -734,6 +734,18 @@ fn dirty_buildings_rounded() {
         (1236..1246).chain([174022, 174112, 174172]).collect(),
         Moves {
             rounded: Some(5),
+            ..Moves::default()
+        },
+    );
+    // To millimetres (epsilon 2.1 mm on buildings of about 7.5 m, where
+    // the generator's dirt is 1 to 30 mm): 170098, a pier's edge 0.998
+    // epsilon in front of an oblique facade (geom::intersect's edges lying
+    // in a face's plane); 170842, an edge 2.4 epsilon long on a neck 1.1
+    // epsilon wide (ugcut's joins under 3 epsilon).
+    run_moved(
+        (1246..1256).chain([170098, 170842]).collect(),
+        Moves {
+            rounded: Some(3),
             ..Moves::default()
         },
     );
