@@ -740,10 +740,14 @@ fn dirty_buildings_rounded() {
     // To millimetres (epsilon 2.1 mm on buildings of about 7.5 m, where
     // the generator's dirt is 1 to 30 mm): 170098, a pier's edge 0.998
     // epsilon in front of an oblique facade (geom::intersect's edges lying
-    // in a face's plane); 170842, an edge 2.4 epsilon long on a neck 1.1
-    // epsilon wide (ugcut's joins under 3 epsilon).
+    // in a face's plane), and 170320, a pipe on a globe's cap at 23°,
+    // which that rule broke below 30°; 170842, an edge 2.4 epsilon long on
+    // a neck 1.1 epsilon wide (ugcut's joins under 3 epsilon); 170770,
+    // running-bond tiles overlapping off their seams (ugvlmerge's groups).
     run_moved(
-        (1246..1256).chain([170098, 170842]).collect(),
+        (1246..1256)
+            .chain([170098, 170320, 170842, 170770])
+            .collect(),
         Moves {
             rounded: Some(3),
             ..Moves::default()

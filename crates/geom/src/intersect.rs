@@ -632,14 +632,19 @@ fn line_of(a: &FaceGeom, b: &FaceGeom, eps: f64) -> LineCase {
     // end points in one order, so the faces that share the edge find the
     // same point.
     let mut ev: Vec<(f64, DVec3, DVec3)> = Vec::new();
-    // At a steep angle, each face's edges lying in the other's plane (both
+    // At 30° or more, each face's edges lying in the other's plane (both
     // ends within epsilon of it), as (t, point) at either end: where the
     // other face's boundary crosses this face's plane *outside* this face
     // but along such an edge, the two meet on the edge, not on the planes'
-    // line (see below).
+    // line (see below). (Not below 30°: there the faces lie within
+    // epsilon of each other along a band several epsilons wide, which is
+    // the coplanar tests' business; moving the cuts there onto the edge
+    // changed where a pendant's pipe and a globe's cap at about 23° were
+    // cut, and ugcut's pieces then overlapped: property seed 170320 to 1
+    // mm.)
     let lying = |g: &FaceGeom, other: &FaceGeom, edges: &[(u32, u32)]| {
         let mut out: Vec<((f64, DVec3), (f64, DVec3))> = Vec::new();
-        if !steep {
+        if uu < 0.25 {
             return out;
         }
         for &(ci, i) in edges {
