@@ -656,25 +656,15 @@ fn shape_defect(cx: &Ctx<'_>, face: &ug::Face, pts: &[Vec<DVec3>], eps: f64) -> 
             None => (0..edges.len()).collect(),
         }
     };
-    for (i, &(ev, a, b)) in edges.iter().enumerate() {
-        for j in near(a.min(b), a.max(b)) {
-            if j <= i {
-                continue;
-            }
-            let (fv, c, d) = edges[j];
-            if ev.iter().any(|v| fv.contains(v)) {
-                continue;
-            }
-            if geom::segments_2d(a, b, c, d) == geom::SegmentContact::Proper {
-                return Some(format!(
-                    "edges {}-{} and {}-{} cross",
-                    cx.vname(ev[0]),
-                    cx.vname(ev[1]),
-                    cx.vname(fv[0]),
-                    cx.vname(fv[1])
-                ));
-            }
-        }
+    if let Some((i, j)) = geom::first_proper_crossing(&edges, &near) {
+        let (ev, fv) = (edges[i].0, edges[j].0);
+        return Some(format!(
+            "edges {}-{} and {}-{} cross",
+            cx.vname(ev[0]),
+            cx.vname(ev[1]),
+            cx.vname(fv[0]),
+            cx.vname(fv[1])
+        ));
     }
     for &(v, p) in &verts {
         for k in near(p - DVec2::splat(eps), p + DVec2::splat(eps)) {

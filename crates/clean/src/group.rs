@@ -755,7 +755,7 @@ pub fn merge_faces(mesh: &mut Mesh, eps: f64, angle_deg: f64) -> Join {
                 && let Some(f) = overlapping_member(mesh, &members, &contours, n, &in_group)
             {
                 if f == s {
-                    break; // the seed crosses itself: left as they are
+                    break; // only the seed's own edges: left as they are
                 }
                 bad.push(f);
             }
@@ -962,22 +962,15 @@ fn overlapping_member(
             .enumerate()
             .map(|(k, &(_, a, b))| (a.min(b).extend(0.0), a.max(b).extend(0.0), k as u32)),
     );
-    for (i, &(ev, a, b)) in edges.iter().enumerate() {
-        for j in index.query(a.min(b).extend(0.0), a.max(b).extend(0.0)) {
-            let j = j as usize;
-            if j <= i {
-                continue;
-            }
-            let (fv, c, d) = edges[j];
-            if ev.iter().any(|v| fv.contains(v)) {
-                continue;
-            }
-            if geom::segments_2d(a, b, c, d) == geom::SegmentContact::Proper {
-                return Some(members[of(ev).max(of(fv))]);
-            }
-        }
-    }
-    None
+    let near = |lo: geom::DVec2, hi: geom::DVec2| -> Vec<usize> {
+        index
+            .query(lo.extend(0.0), hi.extend(0.0))
+            .into_iter()
+            .map(|k| k as usize)
+            .collect()
+    };
+    geom::first_proper_crossing(&edges, &near)
+        .map(|(i, j)| members[of(edges[i].0).max(of(edges[j].0))])
 }
 
 /// The contours of the union of a group of faces: the half-edges of all

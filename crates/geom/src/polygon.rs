@@ -126,6 +126,32 @@ impl Projected {
     }
 }
 
+/// The first two edges (in index order) that properly cross without
+/// sharing an end: edges as their ends' keys and 2-D points, `near(lo, hi)`
+/// the edges whose boxes may meet the box [lo, hi] (all of them, or an
+/// index's answer). `ugcheck`'s "edges … cross" and the grouper's test of
+/// a joined face use it.
+pub fn first_proper_crossing<K: PartialEq + Copy>(
+    edges: &[([K; 2], DVec2, DVec2)],
+    near: &dyn Fn(DVec2, DVec2) -> Vec<usize>,
+) -> Option<(usize, usize)> {
+    for (i, &(ev, a, b)) in edges.iter().enumerate() {
+        for j in near(a.min(b), a.max(b)) {
+            if j <= i {
+                continue;
+            }
+            let (fv, c, d) = edges[j];
+            if ev.iter().any(|v| fv.contains(v)) {
+                continue;
+            }
+            if crate::segments_2d(a, b, c, d) == crate::SegmentContact::Proper {
+                return Some((i, j));
+            }
+        }
+    }
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
