@@ -253,4 +253,31 @@ mod tests {
         assert!((c.common - 0.005).abs() < 1e-12, "{c:?}");
         assert!((c.a - (16.0 - 1.0 + 0.005)).abs() < 1e-12);
     }
+
+    /// Two patches of one facade, in the larger one's frame (property seed
+    /// 170590 to 1 mm, epsilon 2.1 mm): a triangle whose top corner lies
+    /// 2e-31 above the line of the other's top edge, 3.2 mm beyond that
+    /// edge's end. The ray placing the second component crossed both of
+    /// the first's sides from that corner at one rounded x, took the wrong
+    /// one, and put the second inside the first: 0.059 m² of overlap
+    /// where there is none.
+    #[test]
+    fn a_component_beside_a_corner_a_hair_above_its_ray_is_outside() {
+        let a = vec![
+            DVec2::new(0.0, 0.0),
+            DVec2::new(-4.638337116478427, 0.0),
+            DVec2::new(-1.9892182254263848, -0.6999999999999997),
+        ];
+        let b = vec![
+            DVec2::new(-4.641509192661563, 1.9721522630525295e-31),
+            DVec2::new(-4.641509192661563, -2.8),
+            DVec2::new(-3.9784364508527683, -1.3999999999999995),
+        ];
+        let c = coverage(std::slice::from_ref(&a), std::slice::from_ref(&b), 0.0021);
+        assert_eq!(c.common, 0.0, "{c:?}");
+        assert!((c.a - 1.6234179907674489).abs() < 1e-9, "{c:?}");
+        assert!((c.b - 0.9283018385323129).abs() < 1e-9, "{c:?}");
+        let (c, _) = coverage_near(&[a], &[b], 0.0021);
+        assert_eq!(c.common, 0.0, "{c:?}");
+    }
 }
