@@ -191,13 +191,8 @@ fn chain_without_e(input: &[u8], epsilon: &str, more: &[(&str, &[&str])]) -> Vec
 }
 
 /// The cleaning chain on `input` at `-e E` (ugclean also given `clean`),
-/// then the stages `more`; ugcheck's report at E.
-fn checked_chain_at(
-    input: &[u8],
-    e: &str,
-    clean: &[&str],
-    more: &[(&str, &[&str])],
-) -> serde_json::Value {
+/// then the stages `more`; the output.
+fn chain_at(input: &[u8], e: &str, clean: &[&str], more: &[(&str, &[&str])]) -> Vec<u8> {
     let a = ["-q", "-e", e];
     let c: Vec<&str> = a.iter().chain(clean).copied().collect();
     let mut stages: Vec<(&str, &[&str])> = ugkit::CHAIN_TOOLS
@@ -205,7 +200,17 @@ fn checked_chain_at(
         .map(|&t| (t, if t == "ugclean" { &c[..] } else { &a[..] }))
         .collect();
     stages.extend_from_slice(more);
-    let out = pipe(input, &stages);
+    pipe(input, &stages)
+}
+
+/// [`chain_at`], and ugcheck's report on its output at E.
+fn checked_chain_at(
+    input: &[u8],
+    e: &str,
+    clean: &[&str],
+    more: &[(&str, &[&str])],
+) -> serde_json::Value {
+    let out = chain_at(input, e, clean, more);
     serde_json::from_str(&run_ok("ugcheck", &["--json", "-e", e], Some(&out))).unwrap()
 }
 
@@ -310,9 +315,9 @@ fn an_edge_within_epsilon_of_an_oblique_facade_cuts_it() {
         "clean/pier-edge-within-epsilon-of-an-oblique-facade.ug",
     ))
     .unwrap();
-    let a = ["-q", "-e", "2.1e-3"];
-    let stages: Vec<(&str, &[&str])> = ugkit::CHAIN_TOOLS.iter().map(|&t| (t, &a[..])).collect();
-    let cleaned = ug::parse(&pipe(&input, &stages), "<chain>").unwrap().model;
+    let cleaned = ug::parse(&chain_at(&input, "2.1e-3", &[], &[]), "<chain>")
+        .unwrap()
+        .model;
     let on_edge = |v: &ug::VertexId| {
         let p = cleaned.vertices[v.idx()].pos;
         (p.x - 3.471).abs() < 1e-9 && (p.y - 0.125).abs() < 1e-9

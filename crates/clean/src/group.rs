@@ -747,12 +747,13 @@ pub fn merge_faces(mesh: &mut Mesh, eps: f64, angle_deg: f64) -> Join {
             }
             let n = planes[s.idx()].expect("seeds are flat").n;
             let in_group = |f: FaceId| group[f.idx()] == gid;
-            let Some(contours) = trace_group(mesh, &members, n, &in_group) else {
+            let halves = boundary_halves(mesh, &members, &in_group);
+            let Some(contours) = trace_group(mesh, &halves, n) else {
                 break; // left as they are
             };
             let mut bad = swallowing(mesh, &members, &contours, &in_group);
             if bad.is_empty()
-                && let Some(f) = overlapping_member(mesh, &members, &contours, n, &in_group)
+                && let Some(f) = overlapping_member(mesh, &members, &halves, &contours, n)
             {
                 if f == s {
                     break; // only the seed's own edges: left as they are
@@ -913,25 +914,18 @@ fn swallowing(
 fn overlapping_member(
     mesh: &Mesh,
     members: &[FaceId],
+    halves: &[HalfEdge],
     contours: &[Vec<VertexId>],
     n: DVec3,
-    in_group: &dyn Fn(FaceId) -> bool,
 ) -> Option<FaceId> {
-    // Which member each boundary half-edge came from (a seam is no edge of
-    // the contours).
-    let mut owner: FxHashMap<(VertexId, VertexId), usize> = FxHashMap::default();
-    for (mi, &f) in members.iter().enumerate() {
-        for (ci, c) in mesh.face(f).contours.iter().enumerate() {
-            let es = mesh.contour_edges(f, ci);
-            let k = c.len();
-            for i in 0..k {
-                if !partner(mesh, es[i], f).is_some_and(in_group) {
-                    owner.entry((c[i], c[(i + 1) % k])).or_insert(mi);
-                }
-            }
-        }
-    }
-    let of = |e: [VertexId; 2]| owner.get(&(e[0], e[1])).copied().unwrap_or(0);
+    // Which member a contour edge came from (looked up only once a fault
+    // is found).
+    let of = |e: [VertexId; 2]| {
+        halves
+            .iter()
+            .find(|h| h.from == e[0] && h.to == e[1])
+            .map_or(0, |h| h.key.0 as usize)
+    };
     // A contour after the first (the outer one) that runs the outer one's
     // way round encloses ground the faces cover twice, not a hole: rows of
     // running-bond tiles whose shared lines differ by 0.5 mm (seed 170770
@@ -973,19 +967,13 @@ fn overlapping_member(
         .map(|(i, j)| members[of(edges[i].0).max(of(edges[j].0))])
 }
 
-/// The contours of the union of a group of faces: the half-edges of all
-/// their contours less the seams inside the group, paired at each vertex
-/// turning as far left as possible (in the plane of normal `n`, so traced
-/// contours never cross), followed into loops, split where a loop visits a
-/// vertex twice. The loop with the largest area along `n` comes first; the
-/// others follow in the order of their first half-edge. `None` when the
-/// boundary does not close or nothing with area is left.
-fn trace_group(
+/// The half-edges of a group's boundary: those of all its faces' contours
+/// less the seams inside the group, keyed (member, contour, index).
+fn boundary_halves(
     mesh: &Mesh,
     members: &[FaceId],
-    n: DVec3,
     in_group: &dyn Fn(FaceId) -> bool,
-) -> Option<Vec<Vec<VertexId>>> {
+) -> Vec<HalfEdge> {
     let mut halves: Vec<HalfEdge> = Vec::new();
     for (mi, &f) in members.iter().enumerate() {
         for (ci, c) in mesh.face(f).contours.iter().enumerate() {
@@ -1004,8 +992,19 @@ fn trace_group(
             }
         }
     }
+    halves
+}
+
+/// The contours of the union of a group of faces from its boundary
+/// half-edges ([`boundary_halves`]), paired at each vertex turning as far
+/// left as possible (in the plane of normal `n`, so traced contours never
+/// cross), followed into loops, split where a loop visits a vertex twice.
+/// The loop with the largest area along `n` comes first; the others follow
+/// in the order of their first half-edge. `None` when the boundary does not
+/// close or nothing with area is left.
+fn trace_group(mesh: &Mesh, halves: &[HalfEdge], n: DVec3) -> Option<Vec<Vec<VertexId>>> {
     let pos = |v: VertexId| mesh.pos(v);
-    let loops = trace_loops(&halves, &pos, n)?;
+    let loops = trace_loops(halves, &pos, n)?;
     outer_first(loops, &pos, n, false)
 }
 

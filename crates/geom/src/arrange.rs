@@ -794,46 +794,35 @@ impl Graph {
                 };
                 let better = match best {
                     None => true,
-                    // Two edges sharing their upper end (above the ray):
-                    // the one leaning further right below it is nearer,
-                    // decided exactly. Their crossings of the ray may round
-                    // to one value, or even the wrong way round: a
-                    // triangle's two sides from a corner 2e-31 above the
-                    // ray, the ray from a point of another face 3 mm away
-                    // along the same line (two patches of one facade that
-                    // ugcheck found overlapping by 0.059 m², the second
-                    // placed inside the first; property seed 170590 to 1
-                    // mm).
-                    Some((b, _))
-                        if {
-                            let bd = &edges[b as usize];
-                            let (a2, b2) = (pts[bd.0 as usize], pts[bd.1 as usize]);
-                            (if a2.y <= b2.y { b2 } else { a2 }) == hi
-                        } =>
-                    {
-                        let bd = &edges[b as usize];
-                        let (a2, b2) = (pts[bd.0 as usize], pts[bd.1 as usize]);
-                        let blo = if a2.y <= b2.y { a2 } else { b2 };
-                        orient2d(hi, blo, lo) > 0
-                    }
                     Some((b, bx)) => {
-                        if x > bx {
+                        let bd = &edges[b as usize];
+                        let (blo, bhi) = {
+                            let (a2, b2) = (pts[bd.0 as usize], pts[bd.1 as usize]);
+                            if a2.y <= b2.y { (a2, b2) } else { (b2, a2) }
+                        };
+                        if bhi == hi {
+                            // Two edges sharing their upper end (above the
+                            // ray): the one leaning further right below it
+                            // is nearer, decided exactly. Their crossings of
+                            // the ray may round to one value, or even the
+                            // wrong way round: a triangle's two sides from a
+                            // corner 2e-31 above the ray, the ray from a
+                            // point of another face 3 mm away along the same
+                            // line (two patches of one facade that ugcheck
+                            // found overlapping by 0.059 m², the second
+                            // placed inside the first; property seed 170590
+                            // to 1 mm).
+                            orient2d(hi, blo, lo) > 0
+                        } else if x > bx {
                             true
                         } else if x < bx {
                             false
-                        } else {
+                        } else if blo == lo {
                             // Same crossing (a shared end at p's height):
                             // the edge leaning further right is nearer just above.
-                            let bd = &edges[b as usize];
-                            let (blo, bhi) = {
-                                let (a2, b2) = (pts[bd.0 as usize], pts[bd.1 as usize]);
-                                if a2.y <= b2.y { (a2, b2) } else { (b2, a2) }
-                            };
-                            if blo == lo {
-                                orient2d(lo, bhi, hi) < 0
-                            } else {
-                                e < b
-                            }
+                            orient2d(lo, bhi, hi) < 0
+                        } else {
+                            e < b
                         }
                     }
                 };
