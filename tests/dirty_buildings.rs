@@ -214,6 +214,57 @@ fn checked_chain_at(
     serde_json::from_str(&run_ok("ugcheck", &["--json", "-e", e], Some(&out))).unwrap()
 }
 
+/// A column's corner sunk 11 epsilon into a floor slab, exported to
+/// 0.1 mm (fixtures/clean/column-corner-sunk-into-a-floor-at-0.1mm.ug,
+/// reduced from property seed 180121 rounded to 4 decimals). The floor
+/// cuts the corner edge and the two folds either side of it (the column's
+/// top vertex is displaced, so its sides are folded quads) at points 1.2
+/// epsilon apart; one fold's point, put into the other side's cut edge, is
+/// a tent's tip there. ugclean joined it to the nearer neighbour, the
+/// other fold's point, 0.8 epsilon off its own side's plane: that side
+/// then reached round the corner, a wedge 1.8 epsilon wide up the whole
+/// column that both sides covered, and ugcut's patches of the two
+/// overlapped there. Now the tip joins the corner's point, which lies on
+/// both sides (the neighbour that leaves the faces through it flatter).
+#[test]
+fn a_tent_at_a_corner_joins_the_corner() {
+    let input = std::fs::read(ugkit::fixture(
+        "clean/column-corner-sunk-into-a-floor-at-0.1mm.ug",
+    ))
+    .unwrap();
+    let r = checked_chain_at(&input, "2.1e-4", &[], &[]);
+    for key in ugkit::DEFECT_KEYS {
+        assert_eq!(count(&r, key), 0, "{key}: {}", r[key]);
+    }
+    let r = checked_chain_at(
+        &input,
+        "2.1e-4",
+        &[],
+        &[("ugcut", &["-q", "-e", "2.1e-4", "-l", "0.7"])],
+    );
+    for key in ugkit::DEFECT_KEYS {
+        assert_eq!(count(&r, key), 0, "{key}: {}", r[key]);
+    }
+    assert_eq!(count(&r, "nonpatch"), 0, "{}", r["nonpatch"]);
+    // The two sides above the floor meet along the corner only: no vertex
+    // of one lies off its own plane on the other's side.
+    let cleaned = ug::parse(&chain_at(&input, "2.1e-4", &[], &[]), "<chain>")
+        .unwrap()
+        .model;
+    for f in cleaned
+        .faces
+        .iter()
+        .filter(|f| f.name.as_deref().is_some_and(|n| n.starts_with("s0r1_1c.")))
+    {
+        let pts: Vec<glam::DVec3> = f.contours[0]
+            .iter()
+            .map(|v| cleaned.vertices[v.idx()].pos)
+            .collect();
+        let (dev, _) = geom::Plane::face_deviation(&[pts]).unwrap();
+        assert!(dev < 0.1 * 2.1e-4, "{:?} bent by {dev}", f.name);
+    }
+}
+
 /// A slab and three walls exported as Revit writes metres: georeferenced,
 /// turned about all three axes, rounded to 4 decimals
 /// (fixtures/clean/rounded-turned-slab-and-walls.ug). The rounding bends

@@ -718,12 +718,14 @@ fn dirty_buildings_tilted_and_shuffled() {
 /// precision epsilon took flat oblique faces into account and became 2.1
 /// times the precision (docs/decisions.md, "A rounded export's epsilon"),
 /// 53 of 1,150 seeds at 4 decimals and 13 of 400 at 5 failed; the seeds
-/// after the ranges are some of those.
+/// after the ranges are some of those. 180121 at 4 decimals: a column's
+/// corner sunk into the floor, cut 1.2 epsilon from the folds either side
+/// (a tent's tip joins the corner's point, which keeps both sides flat).
 #[test]
 fn dirty_buildings_rounded() {
     run_moved(
         (1216..1236)
-            .chain([125074, 130044, 130048, 150007, 150022, 160007])
+            .chain([125074, 130044, 130048, 150007, 150022, 160007, 180121])
             .collect(),
         Moves {
             rounded: Some(4),

@@ -364,10 +364,12 @@ pub fn is_tent(u: DVec3, v: DVec3, w: DVec3, eps: f64) -> bool {
 /// are less than [`TENT_CHORD`]·`eps` apart, with the triangle `u v w`
 /// degenerate as `ugcheck` measures it (`v` within `eps` of the segment
 /// between them, or the triangle's area at most ε²), is replaced by the
-/// nearer of the two (the earlier in statement order on a tie), in every
-/// face and wire. The triangle is a piece of its face that no mesher can
-/// cover without a degenerate triangle, and so is any triangle that would
-/// take `v` with `u` or `w` (its sides there are about an epsilon long).
+/// nearer of the two (the earlier in statement order on a tie; the farther
+/// where only it keeps the faces through `v` flat: a corner's point between
+/// two folds' points), in every face and wire. The triangle is a piece of
+/// its face that no mesher can cover without a degenerate triangle, and so
+/// is any triangle that would take `v` with `u` or `w` (its sides there are
+/// about an epsilon long).
 /// Seen after the cleaning chain on CAD buildings: a floor's or tile's
 /// corner with a wall's foot cut 1.3 epsilon either side of it (area 0.9
 /// ε²), and a bump 0.75 epsilon high on a tile's side where a desk's feet
@@ -470,7 +472,24 @@ fn collapse_tents_impl(
                     // neither does, as without.
                     let flat = |t: VertexId| !bends(mesh, v, t, eps);
                     let fits = |t: VertexId| flat(t) && accept.is_none_or(|a| a(mesh, v, t));
-                    let to = if fits(near) {
+                    // Of two that fit, the farther where it keeps every face
+                    // through the tip flat (within a tenth of epsilon) and
+                    // the nearer would bend one by a quarter epsilon more
+                    // (property seed 180121 at 0.1 mm: a column's corner
+                    // sunk 11 epsilon into the floor, cut there 1.2 epsilon
+                    // from the two folds either side of it; the fold's
+                    // point, a tip between the corner's and the other
+                    // fold's, joined the nearer, the other fold's, 0.8
+                    // epsilon off its own side's plane: that side then
+                    // reached round the corner, a wedge 1.8 epsilon wide up
+                    // the column that both sides covered, two overlapping
+                    // patches after ugcut. The corner's point lies on both
+                    // sides.)
+                    let flatter = |a: VertexId, b: VertexId| {
+                        let da = deviation_joined(mesh, v, a);
+                        da <= 0.1 * eps && da + 0.25 * eps < deviation_joined(mesh, v, b)
+                    };
+                    let to = if fits(near) && !(fits(far) && flatter(far, near)) {
                         near
                     } else if fits(far) || (!flat(near) && flat(far)) {
                         far
@@ -531,26 +550,53 @@ fn bends_with(
 ) -> bool {
     let pt = mesh.pos(to);
     faces.iter().any(|&f| {
-        let face = mesh.face(f);
-        let dev = |with_v: bool| {
-            let pts: Vec<Vec<DVec3>> = face
-                .contours
-                .iter()
-                .map(|c| {
-                    c.iter()
-                        .map(|&u| match pending.get(&u) {
-                            _ if with_v && u == v => pt,
-                            Some(&p) => p,
-                            None => mesh.pos(u),
-                        })
-                        .collect()
-                })
-                .collect();
-            geom::Plane::face_deviation(&pts).map_or(0.0, |(d, _)| d)
-        };
-        let after = dev(true);
-        after > eps && after > dev(false)
+        let after = deviation(mesh, f, pending, Some((v, pt)));
+        after > eps && after > deviation(mesh, f, pending, None)
     })
+}
+
+/// Face `f`'s deviation from its plane (as `ugcheck` measures it) with
+/// the moves of `pending` and, when given, vertex `v` at `pt` (a point
+/// repeated next to itself counted once, as in the joined contour).
+fn deviation(
+    mesh: &Mesh,
+    f: FaceId,
+    pending: &FxHashMap<VertexId, DVec3>,
+    moved: Option<(VertexId, DVec3)>,
+) -> f64 {
+    let pts: Vec<Vec<DVec3>> = mesh
+        .face(f)
+        .contours
+        .iter()
+        .map(|c| {
+            let mut out: Vec<DVec3> = Vec::with_capacity(c.len());
+            for &u in c {
+                let p = match (moved, pending.get(&u)) {
+                    (Some((v, pt)), _) if u == v => pt,
+                    (_, Some(&p)) => p,
+                    _ => mesh.pos(u),
+                };
+                if out.last() != Some(&p) {
+                    out.push(p);
+                }
+            }
+            if out.len() > 1 && out.first() == out.last() {
+                out.pop();
+            }
+            out
+        })
+        .collect();
+    geom::Plane::face_deviation(&pts).map_or(0.0, |(d, _)| d)
+}
+
+/// How far the faces through `v` lie from their planes once `v` is
+/// joined to `to`: the largest deviation among them.
+fn deviation_joined(mesh: &Mesh, v: VertexId, to: VertexId) -> f64 {
+    let pt = mesh.pos(to);
+    mesh.vertex_faces(v)
+        .iter()
+        .map(|&f| deviation(mesh, f, &FxHashMap::default(), Some((v, pt))))
+        .fold(0.0, f64::max)
 }
 
 /// Joins vertex `from` to vertex `to` for each pair of `joins`, in every
