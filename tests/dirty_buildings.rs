@@ -214,6 +214,15 @@ fn checked_chain_at(
     serde_json::from_str(&run_ok("ugcheck", &["--json", "-e", e], Some(&out))).unwrap()
 }
 
+/// The chain at E and then `ugcut -l 0.7`: only patches, and no defect.
+fn assert_patches_clean(input: &[u8], e: &str) {
+    let r = checked_chain_at(input, e, &[], &[("ugcut", &["-q", "-e", e, "-l", "0.7"])]);
+    for key in ugkit::DEFECT_KEYS {
+        assert_eq!(count(&r, key), 0, "{key}: {}", r[key]);
+    }
+    assert_eq!(count(&r, "nonpatch"), 0, "{}", r["nonpatch"]);
+}
+
 /// A column's corner sunk 11 epsilon into a floor slab, exported to
 /// 0.1 mm (fixtures/clean/column-corner-sunk-into-a-floor-at-0.1mm.ug,
 /// reduced from property seed 180121 rounded to 4 decimals). The floor
@@ -236,16 +245,7 @@ fn a_tent_at_a_corner_joins_the_corner() {
     for key in ugkit::DEFECT_KEYS {
         assert_eq!(count(&r, key), 0, "{key}: {}", r[key]);
     }
-    let r = checked_chain_at(
-        &input,
-        "2.1e-4",
-        &[],
-        &[("ugcut", &["-q", "-e", "2.1e-4", "-l", "0.7"])],
-    );
-    for key in ugkit::DEFECT_KEYS {
-        assert_eq!(count(&r, key), 0, "{key}: {}", r[key]);
-    }
-    assert_eq!(count(&r, "nonpatch"), 0, "{}", r["nonpatch"]);
+    assert_patches_clean(&input, "2.1e-4");
     // The two sides above the floor meet along the corner only: no vertex
     // of one lies off its own plane on the other's side.
     let cleaned = ug::parse(&chain_at(&input, "2.1e-4", &[], &[]), "<chain>")
@@ -382,14 +382,5 @@ fn an_edge_within_epsilon_of_an_oblique_facade_cuts_it() {
     for f in &facade {
         assert_eq!(f.contours[0].iter().filter(|v| on_edge(v)).count(), 2);
     }
-    let r = checked_chain_at(
-        &input,
-        "2.1e-3",
-        &[],
-        &[("ugcut", &["-q", "-e", "2.1e-3", "-l", "0.7"])],
-    );
-    for key in ugkit::DEFECT_KEYS {
-        assert_eq!(count(&r, key), 0, "{key}: {}", r[key]);
-    }
-    assert_eq!(count(&r, "nonpatch"), 0, "{}", r["nonpatch"]);
+    assert_patches_clean(&input, "2.1e-3");
 }
