@@ -265,6 +265,29 @@ fn a_tent_at_a_corner_joins_the_corner() {
     }
 }
 
+/// Walls meeting a facade and a ceiling at a corner, rounded to 1 mm
+/// (fixtures/clean/kept-wall-end-taking-a-facade-pieces-corner.ug, reduced
+/// from property seed 170765). After ugcopl three pieces there are
+/// coincident, the facade's with a corner more, 0.5 epsilon off the
+/// others' edge. The kept wall piece took that contour and stopped walking
+/// the edge back that a ceiling piece and another wall piece walk one way:
+/// with `--keep-enclosed` (where no later step removes those), an
+/// inconsistently oriented edge. Now the kept face takes the contour only
+/// where that spoils no edge.
+#[test]
+fn a_kept_face_takes_its_twins_contour_only_where_no_edge_is_spoiled() {
+    let input = std::fs::read(ugkit::fixture(
+        "clean/kept-wall-end-taking-a-facade-pieces-corner.ug",
+    ))
+    .unwrap();
+    for clean in [&["--keep-enclosed"][..], &[]] {
+        let r = checked_chain_at(&input, "2.1e-3", clean, &[]);
+        for key in ugkit::DEFECT_KEYS {
+            assert_eq!(count(&r, key), 0, "{clean:?} {key}: {}", r[key]);
+        }
+    }
+}
+
 /// A slab and three walls exported as Revit writes metres: georeferenced,
 /// turned about all three axes, rounded to 4 decimals
 /// (fixtures/clean/rounded-turned-slab-and-walls.ug). The rounding bends
