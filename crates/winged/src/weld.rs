@@ -489,7 +489,9 @@ fn collapse_tents_impl(
                         let da = deviation_joined(mesh, v, a);
                         da <= 0.1 * eps && da + 0.25 * eps < deviation_joined(mesh, v, b)
                     };
-                    let to = if fits(near) && !(fits(far) && flatter(far, near)) {
+                    // (The flatness first: `fits` runs the caller's test,
+                    // the dearer, and the farther rarely is flatter.)
+                    let to = if fits(near) && !(flatter(far, near) && fits(far)) {
                         near
                     } else if fits(far) || (!flat(near) && flat(far)) {
                         far
