@@ -386,3 +386,45 @@ fn a_sheet_on_a_surface_faces_like_it() {
     // Run again, nothing changes.
     assert_eq!(run_ok("ugflip", &["-q"], Some(out.as_bytes())), out);
 }
+
+/// fixtures/flip/wall-box-through-a-window-pane.ug: a window pane crosses
+/// a wall box near its start, a fifth of the pane's area inside the box.
+/// The box is a solid and faces outward, given either way round: ugflip
+/// used to judge the pane inside the box at one point (the centroid of its
+/// largest triangle, which lay in the box), took the box for a room
+/// around the pane and turned it inside out (property seed 400319 at 4
+/// decimals with oblique wings: after ugcut, a wing's wall end 1.9
+/// epsilon off the facade it met, facing it, overlapped it).
+#[test]
+fn a_pane_crossing_a_wall_box_does_not_make_it_a_room() {
+    let src = std::fs::read_to_string(fixture("flip/wall-box-through-a-window-pane.ug")).unwrap();
+    // The box turned inside out in the input as well.
+    let reversed: String = src
+        .lines()
+        .map(|l| match (l.find('('), l.find(')')) {
+            (Some(a), Some(b)) if l.starts_with("f ") && !l.contains("glass") => {
+                let mut vs: Vec<&str> = l[a + 1..b].split_whitespace().collect();
+                vs.reverse();
+                format!("{}({}){}\n", &l[..a], vs.join(" "), &l[b + 1..])
+            }
+            _ => format!("{l}\n"),
+        })
+        .collect();
+    assert_ne!(src, reversed);
+    let outward = [
+        ("bottom", 2, -1.0),
+        ("top", 2, 1.0),
+        ("front", 1, -1.0),
+        ("back", 1, 1.0),
+        ("start", 0, -1.0),
+        ("end", 0, 1.0),
+    ];
+    for (what, text) in [("as given", &src), ("inside out", &reversed)] {
+        let out = run_ok("ugflip", &["-q"], Some(text.as_bytes()));
+        let got = normals(&out);
+        for (name, axis, sign) in outward {
+            let n = got.iter().find(|(f, _)| f == name).expect(name).1;
+            assert!(n[axis] * sign > 0.9, "{what}: {name} faces {n:?}");
+        }
+    }
+}
