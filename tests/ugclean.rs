@@ -956,3 +956,31 @@ fn two_tents_on_one_face_join_one_at_a_time() {
         "1.6157269999999999e-4",
     );
 }
+
+/// fixtures/clean/strips-coincident-after-their-tents.ug: a wall end's
+/// sliver and a slab's, whose contours differ only by tents' tips (property
+/// seed 400363 at 4 decimals with oblique wings). ugclean's last step joins
+/// the tips, and the two then lie on the same records: the coincident step,
+/// which ran before, left them as a coincident pair. Now it runs again on
+/// the faces the tents changed; with and without `--keep-enclosed`, the
+/// output has no defect, and one of the two is gone.
+#[test]
+fn the_coincident_pairs_the_tents_make_go_too() {
+    let src = std::fs::read(fixture("clean/strips-coincident-after-their-tents.ug")).unwrap();
+    for extra in [None, Some("--keep-enclosed")] {
+        let mut args = vec!["-q", "-e", "2.1e-4"];
+        args.extend(extra);
+        let out = run_ok("ugclean", &args, Some(&src));
+        let r: serde_json::Value = serde_json::from_str(&run_ok(
+            "ugcheck",
+            &["--json", "-e", "2.1e-4"],
+            Some(out.as_bytes()),
+        ))
+        .unwrap();
+        for key in ugkit::DEFECT_KEYS {
+            let n = r[key].as_array().map_or(0, Vec::len);
+            assert_eq!(n, 0, "{extra:?}: {key}: {}", r[key]);
+        }
+        assert_eq!(faces(&out).len(), 1, "{extra:?}: {:?}", faces(&out));
+    }
+}

@@ -68,7 +68,16 @@ fn main() -> std::process::ExitCode {
             for (r, k, why) in &st.removed {
                 eprintln!("  removed {r} (kept {k}): {why}");
             }
-            eprintln!("{tents} tents' tips joined to a neighbour");
+            eprintln!(
+                "{} tents' tips joined to a neighbour; {} coincident pairs they made, {} faces removed, area {}",
+                tents.joined,
+                tents.coincident.pairs,
+                tents.coincident.removed.len(),
+                tents.coincident.area_removed
+            );
+            for (r, k, why) in &tents.coincident.removed {
+                eprintln!("  removed {r} (kept {k}): {why}");
+            }
             if !args.keep_enclosed {
                 eprintln!(
                     "{} enclosed faces removed, area {}; {} kept where removing them would leave an edge walked twice the same way",

@@ -150,7 +150,19 @@ pub fn surface_areas(mesh: &Mesh, eps: f64) -> Vec<f64> {
 
 /// Removes one face of every coincident pair of a flat model.
 pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
-    let (mut out, mut stats) = clean_once(m, eps);
+    clean_among(m, eps, None)
+}
+
+/// [`clean`] of the pairs with at least one face marked in `among`
+/// (indexed by `FaceId`): after a step that changed a few faces, the
+/// pairs those changes can have made. Later rounds (see [`clean`]) look at
+/// every face.
+pub fn clean_near(m: &Model, eps: f64, among: &[bool]) -> (Model, Stats) {
+    clean_among(m, eps, Some(among))
+}
+
+fn clean_among(m: &Model, eps: f64, among: Option<&[bool]>) -> (Model, Stats) {
+    let (mut out, mut stats) = clean_once(m, eps, among);
     // Sharing a pair's records can make two other faces coincident that
     // were not (a wall's end piece and the facade piece beside it, once
     // both take the corners of a pair between them: property seed 11884,
@@ -161,7 +173,7 @@ pub fn clean(m: &Model, eps: f64) -> (Model, Stats) {
         if shared == 0 {
             break;
         }
-        let (next, st) = clean_once(&out, eps);
+        let (next, st) = clean_once(&out, eps, None);
         if st.pairs == 0 {
             break;
         }
@@ -225,9 +237,16 @@ pub fn join_contours_along_shared_edges(m: &mut Model) -> usize {
     joined
 }
 
-/// One round of [`clean`]: the pairs coincident in `m`.
-fn clean_once(m: &Model, eps: f64) -> (Model, Stats) {
+/// One round of [`clean`]: the pairs coincident in `m` (with `among`,
+/// those with a face marked).
+fn clean_once(m: &Model, eps: f64, among: Option<&[bool]>) -> (Model, Stats) {
     let (faces, geoms) = check::face_geoms(m);
+    let marked: Option<Vec<bool>> = among.map(|a| {
+        faces
+            .iter()
+            .map(|f| a.get(f.idx()).copied().unwrap_or(false))
+            .collect()
+    });
     let points = |f: FaceId| -> Vec<Vec<DVec3>> {
         m.faces[f.idx()]
             .contours
@@ -235,12 +254,16 @@ fn clean_once(m: &Model, eps: f64) -> (Model, Stats) {
             .map(|c| c.iter().map(|&v| m.pos(v)).collect())
             .collect()
     };
-    let pairs: Vec<(usize, usize)> =
-        check::coplanar_pairs(&geoms, eps, geom::intersect::CLEAN_COPLANAR_EPSILONS)
-            .into_iter()
-            .filter(|p| p.2 == PairKind::Coincident)
-            .map(|(i, j, _)| (i, j))
-            .collect();
+    let pairs: Vec<(usize, usize)> = check::coplanar_pairs_with(
+        &geoms,
+        eps,
+        marked.as_deref(),
+        geom::intersect::CLEAN_COPLANAR_EPSILONS,
+    )
+    .into_iter()
+    .filter(|p| p.2 == PairKind::Coincident)
+    .map(|(i, j, _)| (i, j))
+    .collect();
     let mut stats = Stats {
         pairs: pairs.len(),
         ..Stats::default()
