@@ -421,11 +421,11 @@ fn one_moved(seed: u64, moves: Moves) -> Vec<String> {
                 .expect("UG_DUMP");
         }
     }
-    let (coincident, _) = clean::coincident::clean(&copl, eps);
+    let (coincident, cst) = clean::coincident::clean(&copl, eps);
     // (ugclean's last step, the tents, applies with or without the
     // enclosed faces' removal.)
     let report = check::check(
-        &clean::group::collapse_tents(coincident.clone(), eps).0,
+        &clean::group::collapse_tents(coincident.clone(), eps, &cst.bent).0,
         eps,
     );
     if report.defects() > 0 {
@@ -436,7 +436,7 @@ fn one_moved(seed: u64, moves: Moves) -> Vec<String> {
     }
     // ugclean's second step, the enclosed faces: still no defect.
     let (cleaned, _) = clean::enclosed::remove(&coincident, eps);
-    let (cleaned, _) = clean::group::collapse_tents(cleaned, eps);
+    let (cleaned, _) = clean::group::collapse_tents(cleaned, eps, &cst.bent);
     let report = check::check(&cleaned, eps);
     if report.defects() > 0 {
         problems.push(format!("chain: {}", defects(&report)));

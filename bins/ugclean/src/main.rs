@@ -54,7 +54,7 @@ fn main() -> std::process::ExitCode {
         } else {
             clean::enclosed::remove(&out, eps)
         };
-        let (out, tents) = clean::group::collapse_tents(out, eps);
+        let (out, tents) = clean::group::collapse_tents(out, eps, &st.bent);
         if c.verbose > 0 {
             eprintln!(
                 "epsilon {eps:e}; {} coincident pairs; removed {} faces, area {}; {} kept faces took a removed twin's contours; {} vertex records of kept faces replaced by the removed twins'; {} edges that two contours of a face then walked both ways joined",
@@ -69,7 +69,8 @@ fn main() -> std::process::ExitCode {
                 eprintln!("  removed {r} (kept {k}): {why}");
             }
             eprintln!(
-                "{} tents' tips joined to a neighbour; {} coincident pairs they made, {} faces removed, area {}",
+                "{} faces left more than epsilon off their plane, folded into triangles; {} tents' tips joined to a neighbour; {} coincident pairs they made, {} faces removed, area {}",
+                tents.folded,
                 tents.joined,
                 tents.coincident.pairs,
                 tents.coincident.removed.len(),

@@ -64,6 +64,9 @@ pub struct Stats {
     /// corner theirs did and more, or which leave fewer edges walked twice
     /// one way once the records are shared (see [`take_twin_shapes`]).
     pub reshaped: usize,
+    /// Faces (by name) the shared records left more than epsilon off their
+    /// plane: [`crate::group::collapse_tents`] folds those left.
+    pub bent: Vec<String>,
 }
 
 fn label(m: &Model, k: usize, f: FaceId) -> String {
@@ -188,7 +191,35 @@ fn clean_among(m: &Model, eps: f64, among: Option<&[bool]>) -> (Model, Stats) {
     if stats.snapped > 0 {
         stats.joined = join_contours_along_shared_edges(&mut out);
     }
+    if stats.snapped + stats.reshaped > 0 {
+        stats.bent = bent_faces(m, &out, eps);
+    }
     (out, stats)
+}
+
+/// The named faces of `out` more than `eps` off their plane that were not
+/// so in `m` (by name).
+fn bent_faces(m: &Model, out: &Model, eps: f64) -> Vec<String> {
+    let off = |m: &Model, f: FaceId| {
+        crate::planar::deviation(m, &m.faces[f.idx()]).is_some_and(|(dev, _)| dev > eps)
+    };
+    let now: Vec<&String> = out
+        .top_faces()
+        .filter(|&f| off(out, f))
+        .filter_map(|f| out.faces[f.idx()].name.as_ref())
+        .collect();
+    if now.is_empty() {
+        return Vec::new();
+    }
+    let was: rustc_hash::FxHashSet<&String> = m
+        .top_faces()
+        .filter(|&f| off(m, f))
+        .filter_map(|f| m.faces[f.idx()].name.as_ref())
+        .collect();
+    now.into_iter()
+        .filter(|n| !was.contains(n))
+        .cloned()
+        .collect()
 }
 
 /// Where two contours of a face walk one edge in opposite directions (a

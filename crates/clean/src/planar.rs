@@ -66,6 +66,11 @@ pub fn tessellate(m: &Model, f: &Face) -> Option<Vec<[VertexId; 3]>> {
 
 /// Replaces every face that deviates from its plane by more than `eps` with triangles.
 pub fn planarize(m: &Model, eps: f64) -> (Model, Stats) {
+    planarize_where(m, eps, &|_| true)
+}
+
+/// [`planarize`] of the faces `fold` takes only.
+fn planarize_where(m: &Model, eps: f64, fold: &dyn Fn(&Face) -> bool) -> (Model, Stats) {
     let mut stats = Stats::default();
     let mut names: FxHashSet<String> = m.faces.iter().filter_map(|f| f.name.clone()).collect();
     names.extend(m.wires.iter().filter_map(|w| w.name.clone()));
@@ -89,7 +94,7 @@ pub fn planarize(m: &Model, eps: f64) -> (Model, Stats) {
             .clone()
             .unwrap_or_else(|| format!("#{}", stats.faces));
         let tris = match deviation(m, f) {
-            Some((dev, _)) if dev > eps => {
+            Some((dev, _)) if dev > eps && fold(f) => {
                 stats.nonplanar += 1;
                 let t = tessellate(m, f).or_else(|| {
                     stats.repaired.push(label.clone());
@@ -146,6 +151,21 @@ pub fn planarize(m: &Model, eps: f64) -> (Model, Stats) {
 /// face may end up a little more than `eps` off its plane (1.0–1.8 eps on
 /// the 100k CAD building, 15 faces through the chain), and no tool passes
 /// a non-planar face on.
+/// [`refold`] of the faces named in `names` only (the faces a step bent,
+/// where others may have come in bent: `ugclean`).
+pub fn refold_named(m: Model, eps: f64, names: &FxHashSet<String>) -> (Model, usize) {
+    let take = |f: &Face| f.name.as_ref().is_some_and(|n| names.contains(n));
+    let bent = m.top_faces().any(|f| {
+        let face = &m.faces[f.idx()];
+        take(face) && deviation(&m, face).is_some_and(|(dev, _)| dev > eps)
+    });
+    if !bent {
+        return (m, 0);
+    }
+    let (out, st) = planarize_where(&m, eps, &take);
+    (out, st.nonplanar)
+}
+
 pub fn refold(m: Model, eps: f64) -> (Model, usize) {
     let bent = m
         .top_faces()
