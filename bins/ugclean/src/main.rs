@@ -68,17 +68,6 @@ fn main() -> std::process::ExitCode {
             for (r, k, why) in &st.removed {
                 eprintln!("  removed {r} (kept {k}): {why}");
             }
-            eprintln!(
-                "{} faces left more than epsilon off their plane, folded into triangles; {} tents' tips joined to a neighbour; {} coincident pairs they made, {} faces removed, area {}",
-                tents.folded,
-                tents.joined,
-                tents.coincident.pairs,
-                tents.coincident.removed.len(),
-                tents.coincident.area_removed
-            );
-            for (r, k, why) in &tents.coincident.removed {
-                eprintln!("  removed {r} (kept {k}): {why}");
-            }
             if !args.keep_enclosed {
                 eprintln!(
                     "{} enclosed faces removed, area {}; {} kept where removing them would leave an edge walked twice the same way",
@@ -91,6 +80,17 @@ fn main() -> std::process::ExitCode {
                         eprintln!("  enclosed {r}");
                     }
                 }
+            }
+            eprintln!(
+                "{} faces left more than epsilon off their plane, folded into triangles; {} tents' tips joined to a neighbour; {} coincident pairs they made, {} faces removed, area {}",
+                tents.folded,
+                tents.joined,
+                tents.coincident.pairs,
+                tents.coincident.removed.len(),
+                tents.coincident.area_removed
+            );
+            for (r, k, why) in &tents.coincident.removed {
+                eprintln!("  removed {r} (kept {k}): {why}");
             }
         }
         Ok(out)
