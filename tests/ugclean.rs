@@ -967,22 +967,33 @@ fn two_tents_on_one_face_join_one_at_a_time() {
 #[test]
 fn the_coincident_pairs_the_tents_make_go_too() {
     let src = std::fs::read(fixture("clean/strips-coincident-after-their-tents.ug")).unwrap();
-    for extra in [None, Some("--keep-enclosed")] {
-        let mut args = vec!["-q", "-e", "2.1e-4"];
-        args.extend(extra);
-        let out = run_ok("ugclean", &args, Some(&src));
-        let r: serde_json::Value = serde_json::from_str(&run_ok(
-            "ugcheck",
-            &["--json", "-e", "2.1e-4"],
-            Some(out.as_bytes()),
-        ))
-        .unwrap();
-        for key in ugkit::DEFECT_KEYS {
-            let n = r[key].as_array().map_or(0, Vec::len);
-            assert_eq!(n, 0, "{extra:?}: {key}: {}", r[key]);
-        }
+    for (extra, out) in cleaned_both_ways(&src, "2.1e-4") {
         assert_eq!(faces(&out).len(), 1, "{extra:?}: {:?}", faces(&out));
     }
+}
+
+/// ugclean's output on `src` at epsilon `eps`, without and with
+/// `--keep-enclosed`, each checked to have no defect.
+fn cleaned_both_ways(src: &[u8], eps: &str) -> Vec<(Option<&'static str>, String)> {
+    [None, Some("--keep-enclosed")]
+        .into_iter()
+        .map(|extra| {
+            let mut args = vec!["-q", "-e", eps];
+            args.extend(extra);
+            let out = run_ok("ugclean", &args, Some(src));
+            let r: serde_json::Value = serde_json::from_str(&run_ok(
+                "ugcheck",
+                &["--json", "-e", eps],
+                Some(out.as_bytes()),
+            ))
+            .unwrap();
+            for key in ugkit::DEFECT_KEYS {
+                let n = r[key].as_array().map_or(0, Vec::len);
+                assert_eq!(n, 0, "{extra:?}: {key}: {}", r[key]);
+            }
+            (extra, out)
+        })
+        .collect()
 }
 
 /// fixtures/clean/wall-top-bent-by-shared-records-at-1mm.ug: a wall run's
@@ -990,25 +1001,11 @@ fn the_coincident_pairs_the_tents_make_go_too() {
 /// pair's corners; each move keeps it within half an epsilon of its plane,
 /// together they leave it 3 epsilon off (property seed 400805 at 1 mm, with
 /// `--keep-enclosed`). ugclean folds such a face into triangles: with and
-/// without `--keep-enclosed`, no defect, and the area of each material is
-/// what the coincident step leaves (one face of each pair).
+/// without `--keep-enclosed`, no defect, and the top is triangles.
 #[test]
 fn a_face_the_shared_records_bend_is_folded() {
     let src = std::fs::read(fixture("clean/wall-top-bent-by-shared-records-at-1mm.ug")).unwrap();
-    for extra in [None, Some("--keep-enclosed")] {
-        let mut args = vec!["-q", "-e", "2.1e-3"];
-        args.extend(extra);
-        let out = run_ok("ugclean", &args, Some(&src));
-        let r: serde_json::Value = serde_json::from_str(&run_ok(
-            "ugcheck",
-            &["--json", "-e", "2.1e-3"],
-            Some(out.as_bytes()),
-        ))
-        .unwrap();
-        for key in ugkit::DEFECT_KEYS {
-            let n = r[key].as_array().map_or(0, Vec::len);
-            assert_eq!(n, 0, "{extra:?}: {key}: {}", r[key]);
-        }
+    for (extra, out) in cleaned_both_ways(&src, "2.1e-3") {
         // The bent top is now triangles, all of them kept.
         let tops: Vec<String> = faces(&out)
             .into_iter()
