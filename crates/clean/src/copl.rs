@@ -389,7 +389,7 @@ pub const MAX_ROUNDS: usize = 3;
 
 /// Per face (by `FaceId` index; `None` for faces that are not top-level):
 /// a hash of its material and its points' bits in order.
-fn face_keys(m: &Model) -> Vec<Option<u64>> {
+pub(crate) fn face_keys(m: &Model) -> Vec<Option<u64>> {
     use std::hash::{BuildHasher, Hash, Hasher};
     let mut keys = vec![None; m.faces.len()];
     for f in m.top_faces() {

@@ -213,8 +213,9 @@ pub fn vlmerge(model: Model, opts: &Options) -> Result<(Model, Stats), ug::Diagn
 /// seed 95032 rounded to 1 mm, 2 T-vertices after the chain.) A model
 /// with none of these comes back as it was.
 ///
-/// First the faces in `bent` (the coincident step's [`crate::coincident::Stats::bent`]) are
-/// folded into triangles where still more than epsilon off their plane.
+/// First the faces in `bent` (the coincident step's
+/// [`crate::coincident::Stats::bent`]) are folded into triangles where
+/// still more than epsilon off their plane.
 ///
 /// Joining a tip can make two faces coincident (the same corners, or the
 /// same region): a facade piece and a wall piece whose contours differed
@@ -231,29 +232,29 @@ pub fn collapse_tents(model: Model, eps: f64, bent: &[String]) -> (Model, Tents)
     // top 3 epsilon off its plane: property seed 400805 on 3 × 2 rooms at
     // 1 mm, with `--keep-enclosed`). As `ugisect` and `ugcopl` do, such a
     // face is folded into triangles: no tool passes a non-planar face on
-    // (one that came in so stays as it was). Here, after the enclosed faces went (most such faces lie inside a
-    // slab), not before: folded, a face 3 epsilon off its plane may cross
-    // a neighbour, and a face crossed stays (seed 170845).
-    let bent: rustc_hash::FxHashSet<String> = bent.iter().cloned().collect();
+    // (one that came in so stays as it was). Here, after the enclosed
+    // faces went (most such faces lie inside a slab), not before: folded,
+    // a face 3 epsilon off its plane may cross a neighbour, and a face
+    // crossed stays (seed 170845).
+    let bent: FxHashSet<String> = bent.iter().cloned().collect();
     let (model, folded) = crate::planar::refold_named(model, eps, &bent);
-    let mut prev = model.clone();
+    // The faces as they were (material and points), to find those a round
+    // changed: a second coincident pass over every face of a building of
+    // 300,000 cost a third of ugclean's time.
+    let mut before: FxHashSet<u64> = crate::copl::face_keys(&model)
+        .into_iter()
+        .flatten()
+        .collect();
     let (mut out, mut joined, mut moved) = collapse_tents_once(model, eps);
     let mut coincident = crate::coincident::Stats::default();
     for _ in 0..2 {
         if !moved {
             break;
         }
-        // The faces the round changed: those whose contours are not the
-        // input's (a second coincident pass over a whole building of
-        // 300,000 faces costs a third of ugclean's time).
-        let before: rustc_hash::FxHashSet<&Vec<Vec<VertexId>>> = prev
-            .top_faces()
-            .map(|f| &prev.faces[f.idx()].contours)
+        let among: Vec<bool> = crate::copl::face_keys(&out)
+            .iter()
+            .map(|k| k.is_some_and(|k| !before.contains(&k)))
             .collect();
-        let mut among = vec![false; out.faces.len()];
-        for f in out.top_faces() {
-            among[f.idx()] = !before.contains(&out.faces[f.idx()].contours);
-        }
         let (next, st) = crate::coincident::clean_near(&out, eps, &among);
         if st.removed.is_empty() {
             break;
@@ -261,7 +262,10 @@ pub fn collapse_tents(model: Model, eps: f64, bent: &[String]) -> (Model, Tents)
         coincident.pairs += st.pairs;
         coincident.removed.extend(st.removed);
         coincident.area_removed += st.area_removed;
-        prev = next.clone();
+        before = crate::copl::face_keys(&next)
+            .into_iter()
+            .flatten()
+            .collect();
         let (o, j, m) = collapse_tents_once(next, eps);
         (out, moved) = (o, m);
         joined += j;

@@ -151,6 +151,17 @@ fn planarize_where(m: &Model, eps: f64, fold: &dyn Fn(&Face) -> bool) -> (Model,
 /// face may end up a little more than `eps` off its plane (1.0–1.8 eps on
 /// the 100k CAD building, 15 faces through the chain), and no tool passes
 /// a non-planar face on.
+pub fn refold(m: Model, eps: f64) -> (Model, usize) {
+    let bent = m
+        .top_faces()
+        .any(|f| deviation(&m, &m.faces[f.idx()]).is_some_and(|(dev, _)| dev > eps));
+    if !bent {
+        return (m, 0);
+    }
+    let (out, st) = planarize(&m, eps);
+    (out, st.nonplanar)
+}
+
 /// [`refold`] of the faces named in `names` only (the faces a step bent,
 /// where others may have come in bent: `ugclean`).
 pub fn refold_named(m: Model, eps: f64, names: &FxHashSet<String>) -> (Model, usize) {
@@ -163,17 +174,6 @@ pub fn refold_named(m: Model, eps: f64, names: &FxHashSet<String>) -> (Model, us
         return (m, 0);
     }
     let (out, st) = planarize_where(&m, eps, &take);
-    (out, st.nonplanar)
-}
-
-pub fn refold(m: Model, eps: f64) -> (Model, usize) {
-    let bent = m
-        .top_faces()
-        .any(|f| deviation(&m, &m.faces[f.idx()]).is_some_and(|(dev, _)| dev > eps));
-    if !bent {
-        return (m, 0);
-    }
-    let (out, st) = planarize(&m, eps);
     (out, st.nonplanar)
 }
 
