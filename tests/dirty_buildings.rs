@@ -217,9 +217,7 @@ fn checked_chain_at(
 /// The chain at E and then `ugcut -l 0.7`: only patches, and no defect.
 fn assert_patches_clean(input: &[u8], e: &str) {
     let r = checked_chain_at(input, e, &[], &[("ugcut", &["-q", "-e", e, "-l", "0.7"])]);
-    for key in ugkit::DEFECT_KEYS {
-        assert_eq!(count(&r, key), 0, "{key}: {}", r[key]);
-    }
+    ugkit::assert_no_defects(&r, "after ugcut");
     assert_eq!(count(&r, "nonpatch"), 0, "{}", r["nonpatch"]);
 }
 
@@ -242,9 +240,7 @@ fn a_tent_at_a_corner_joins_the_corner() {
     ))
     .unwrap();
     let r = checked_chain_at(&input, "2.1e-4", &[], &[]);
-    for key in ugkit::DEFECT_KEYS {
-        assert_eq!(count(&r, key), 0, "{key}: {}", r[key]);
-    }
+    ugkit::assert_no_defects(&r, "after the chain");
     assert_patches_clean(&input, "2.1e-4");
     // The two sides above the floor meet along the corner only: no vertex
     // of one lies off its own plane on the other's side.
@@ -282,9 +278,7 @@ fn a_kept_face_takes_its_twins_contour_only_where_no_edge_is_spoiled() {
     .unwrap();
     for clean in [&["--keep-enclosed"][..], &[]] {
         let r = checked_chain_at(&input, "2.1e-3", clean, &[]);
-        for key in ugkit::DEFECT_KEYS {
-            assert_eq!(count(&r, key), 0, "{clean:?} {key}: {}", r[key]);
-        }
+        ugkit::assert_no_defects(&r, &format!("{clean:?}"));
     }
 }
 

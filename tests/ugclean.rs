@@ -987,10 +987,7 @@ fn cleaned_both_ways(src: &[u8], eps: &str) -> Vec<(Option<&'static str>, String
                 Some(out.as_bytes()),
             ))
             .unwrap();
-            for key in ugkit::DEFECT_KEYS {
-                let n = r[key].as_array().map_or(0, Vec::len);
-                assert_eq!(n, 0, "{extra:?}: {key}: {}", r[key]);
-            }
+            ugkit::assert_no_defects(&r, &format!("{extra:?}"));
             (extra, out)
         })
         .collect()

@@ -191,3 +191,12 @@ pub const DEFECT_KEYS: [&str; 7] = [
     "degenerate",
     "inconsistent",
 ];
+
+/// Asserts that ugcheck's JSON report `r` lists no defect of any kind
+/// ([`DEFECT_KEYS`]); `what` names the case in the message.
+pub fn assert_no_defects(r: &serde_json::Value, what: &str) {
+    for key in DEFECT_KEYS {
+        let n = r[key].as_array().map_or(0, Vec::len);
+        assert_eq!(n, 0, "{what}: {key}: {}", r[key]);
+    }
+}

@@ -236,8 +236,7 @@ pub fn collapse_tents(model: Model, eps: f64, bent: &[String]) -> (Model, Tents)
     // faces went (most such faces lie inside a slab), not before: folded,
     // a face 3 epsilon off its plane may cross a neighbour, and a face
     // crossed stays (seed 170845).
-    let bent: FxHashSet<String> = bent.iter().cloned().collect();
-    let (model, folded) = crate::planar::refold_named(model, eps, &bent);
+    let (model, folded) = crate::planar::refold_named(model, eps, bent);
     // The faces as they were (material and points), to find those a round
     // changed: a second coincident pass over every face of a building of
     // 300,000 cost a third of ugclean's time.

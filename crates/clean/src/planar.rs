@@ -152,28 +152,31 @@ fn planarize_where(m: &Model, eps: f64, fold: &dyn Fn(&Face) -> bool) -> (Model,
 /// the 100k CAD building, 15 faces through the chain), and no tool passes
 /// a non-planar face on.
 pub fn refold(m: Model, eps: f64) -> (Model, usize) {
-    let bent = m
-        .top_faces()
-        .any(|f| deviation(&m, &m.faces[f.idx()]).is_some_and(|(dev, _)| dev > eps));
-    if !bent {
-        return (m, 0);
-    }
-    let (out, st) = planarize(&m, eps);
-    (out, st.nonplanar)
+    refold_where(m, eps, &|_| true)
 }
 
 /// [`refold`] of the faces named in `names` only (the faces a step bent,
 /// where others may have come in bent: `ugclean`).
-pub fn refold_named(m: Model, eps: f64, names: &FxHashSet<String>) -> (Model, usize) {
-    let take = |f: &Face| f.name.as_ref().is_some_and(|n| names.contains(n));
+pub fn refold_named(m: Model, eps: f64, names: &[String]) -> (Model, usize) {
+    if names.is_empty() {
+        return (m, 0);
+    }
+    let names: FxHashSet<&str> = names.iter().map(String::as_str).collect();
+    refold_where(m, eps, &|f: &Face| {
+        f.name.as_deref().is_some_and(|n| names.contains(n))
+    })
+}
+
+/// [`refold`] of the faces `fold` takes.
+fn refold_where(m: Model, eps: f64, fold: &dyn Fn(&Face) -> bool) -> (Model, usize) {
     let bent = m.top_faces().any(|f| {
         let face = &m.faces[f.idx()];
-        take(face) && deviation(&m, face).is_some_and(|(dev, _)| dev > eps)
+        fold(face) && deviation(&m, face).is_some_and(|(dev, _)| dev > eps)
     });
     if !bent {
         return (m, 0);
     }
-    let (out, st) = planarize_where(&m, eps, &take);
+    let (out, st) = planarize_where(&m, eps, fold);
     (out, st.nonplanar)
 }
 
