@@ -863,6 +863,40 @@ fn a_division_point_resting_inside_another_face_is_left_out() {
     );
 }
 
+/// A globe's cap facet leaving the hole it passes through in a ceiling at
+/// about 15°, coordinates rounded to 1 mm
+/// (fixtures/cut/globe-cap-under-a-ceiling-at-1mm.ug, property seed 400809):
+/// the two lie within 2 epsilon of each other over a band 7.7 epsilon wide
+/// along the hole's edge, and the mesher cut the ceiling round the hole,
+/// whose edges are 3.4 epsilon long, into triangles smaller than the band,
+/// which lay in the facet's plane and overlapped it (1 to 3 overlapping
+/// pairs at -l 0.32, 0.7 and 0.2). Now the points inside the ceiling that
+/// lie in the facet's plane there are taken out and their patches
+/// triangulated again without them.
+#[test]
+fn no_patch_lies_in_the_band_of_a_shallow_contact() {
+    cuts_cleanly(
+        "cut/globe-cap-under-a-ceiling-at-1mm.ug",
+        "0.0021",
+        &["0.32", "0.7", "0.2", "1", "2"],
+        // (the ceiling is planar only within epsilon: its patches' area
+        // differs from the polygon's by 2e-6, before the change as after)
+        1e-5,
+    );
+    // The points were taken out, and so were their vertex statements.
+    let input = std::fs::read(fixture("cut/globe-cap-under-a-ceiling-at-1mm.ug")).unwrap();
+    let out = run_ok("ugcut", &["-e", "0.0021", "-l", "0.7"], Some(&input));
+    let named: std::collections::HashSet<&str> = out
+        .lines()
+        .filter(|l| l.starts_with("f "))
+        .flat_map(|l| l.split(['(', ')', ' ']).skip(2))
+        .collect();
+    for l in out.lines().filter(|l| l.starts_with("v ")) {
+        let name = l.split_whitespace().nth(1).unwrap();
+        assert!(named.contains(name), "vertex {name} is named by no patch");
+    }
+}
+
 /// A pipe's face piece ending on a globe in a corner of 24°, its end edge
 /// 2.6 epsilon long shared with the globe's piece at a fold of 25°
 /// (fixtures/cut/pipe-corner-on-a-globe.ug, property seed 13674): the

@@ -34,7 +34,12 @@
 //!    shortest side is a boundary edge, gets a point straight across that
 //!    edge, and the triangulation is read again; then
 //!    pairs of triangles that form a well-shaped convex quadrilateral are
-//!    joined.
+//!    joined;
+//! 4. where a face meets another at a small angle (a globe's cap facet and
+//!    the ceiling it passes through), no patch may lie wholly in the other
+//!    face's plane over it ([`shallow`]): the points inside the face that
+//!    lie there are taken out and their patches triangulated again, or a
+//!    diagonal is flipped.
 //!
 //! Where no triangle wider than epsilon fits on a short boundary edge, or
 //! a patch edge leaving a corner passes within epsilon of another face's
@@ -56,6 +61,7 @@ use ug::{Face, FaceId, Item, Model, Vertex, VertexId};
 use winged::pieces::replace;
 
 mod reuse;
+mod shallow;
 
 /// A face's patches: each a list of contours (one, for a patch).
 type Patches = Vec<Vec<Vec<VertexId>>>;
@@ -113,6 +119,12 @@ pub struct Stats {
     /// its plane, more than epsilon inside its contours), made corners of
     /// its patches (see [`resting_points`]).
     pub resting: usize,
+    /// Diagonals flipped inside faces so that fewer patches lie in the
+    /// plane of a face meeting theirs at a small angle (see [`shallow`]).
+    pub shallow_flips: usize,
+    /// Points inside faces taken out for the same reason, their patches
+    /// triangulated again.
+    pub shallow_points: usize,
 }
 
 /// The default patch length: 2% of the model's bounding-box diagonal.
@@ -1036,7 +1048,8 @@ fn cut_rounds(m: &Model, opts: Options, replay: bool) -> Result<(Model, Stats), 
             }
             _ => None,
         };
-        let (out, done, mut joins, next) = mesh_all(&model, opts, stats.clone(), again.as_ref())?;
+        let (mut out, mut done, mut joins, next, parent) =
+            mesh_all(&model, opts, stats.clone(), again.as_ref())?;
         drop(again);
         // A boundary edge a little longer than epsilon that no triangle
         // can take without being narrower than epsilon (its face is too
@@ -1064,6 +1077,12 @@ fn cut_rounds(m: &Model, opts: Options, replay: bool) -> Result<(Model, Stats), 
         });
         joins.dedup();
         if joins.is_empty() || round == 3 {
+            let sh = shallow::repair(&model, &mut out, &parent, opts.eps);
+            if sh.flips + sh.removed > 0 {
+                done.shallow_flips = sh.flips;
+                done.shallow_points = sh.removed;
+                recount(&out, &mut done);
+            }
             return Ok((out, done));
         }
         let joined = prepare_joining(&model, opts.eps, &mut stats, &joins, replay);
@@ -1354,8 +1373,9 @@ fn mesh_all(
     opts: Options,
     mut stats: Stats,
     reuse: Option<&reuse::Reuse<'_>>,
-) -> Result<(Model, Stats, Joins, reuse::Memo), String> {
+) -> Result<(Model, Stats, Joins, reuse::Memo, Vec<u32>), String> {
     let (edges, start, ends) = edges_at_vertices(m);
+    let mut parent: Vec<u32> = Vec::new();
     let mut planes = FacePlanes::new(m);
     let resting = resting_points(&mut planes, m, opts.eps, (&edges, &start, &ends));
     let mut cx = Ctx {
@@ -1535,6 +1555,7 @@ fn mesh_all(
                         contours,
                         material: face.material,
                     });
+                    parent.push(f.0);
                     out.items.push(Item::Face(id));
                 }
             }
@@ -1562,7 +1583,64 @@ fn mesh_all(
     let mut stuck = cx.stuck;
     stuck.sort_unstable();
     stuck.dedup();
-    Ok((out, stats, stuck, memo))
+    Ok((out, stats, stuck, memo, parent))
+}
+
+/// The patches' counts and shape figures of `stats`, from `out` (after
+/// [`shallow::repair`] changed some).
+fn recount(out: &Model, stats: &mut Stats) {
+    let (mut quads, mut triangles, mut patches) = (0, 0, 0);
+    let (mut lo, mut hi, mut sum, mut count) = (f64::INFINITY, 0.0f64, 0.0, 0usize);
+    let mut worst = 180.0f64;
+    for f in out.top_faces() {
+        let face = &out.faces[f.idx()];
+        patches += 1;
+        if face.contours.len() != 1 {
+            continue;
+        }
+        let c = &face.contours[0];
+        for i in 0..c.len() {
+            let l = out.pos(c[(i + 1) % c.len()]).distance(out.pos(c[i]));
+            lo = lo.min(l);
+            hi = hi.max(l);
+            sum += l;
+            count += 1;
+        }
+        if c.len() == 3 {
+            triangles += 1;
+            worst = worst.min(min_angle(&[out.pos(c[0]), out.pos(c[1]), out.pos(c[2])]));
+        } else {
+            quads += 1;
+        }
+    }
+    stats.patches = patches;
+    stats.quads = quads;
+    stats.triangles = triangles;
+    stats.worst_angle = worst;
+    if count > 0 {
+        stats.min_edge = lo;
+        stats.max_edge = hi;
+        stats.mean_edge = sum / count as f64;
+    }
+}
+
+/// Per face of `m`, whether another top-level face has the same vertices
+/// (the mesher gives the two the same patches).
+fn twinned_faces(m: &Model) -> Vec<bool> {
+    let mut count: FxHashMap<Vec<VertexId>, u32> = FxHashMap::default();
+    let key = |f: &Face| {
+        let mut k: Vec<VertexId> = f.contours.iter().flatten().copied().collect();
+        k.sort_unstable();
+        k.dedup();
+        k
+    };
+    for f in m.top_faces() {
+        *count.entry(key(&m.faces[f.idx()])).or_default() += 1;
+    }
+    m.faces
+        .iter()
+        .map(|f| count.get(&key(f)).is_some_and(|&c| c > 1))
+        .collect()
 }
 
 /// Writes vertex statements for the vertices created since the last call.
