@@ -154,7 +154,15 @@ fn bad(ga: &FaceGeom, gb: &FaceGeom, eps: f64) -> bool {
 /// patches at it.
 struct State<'a> {
     out: &'a mut Model,
-    parent: &'a [u32],
+    /// Per patch, the face of the meshed model it was made from (patches
+    /// added by the repairs too).
+    parent: Vec<u32>,
+    /// Patches added, each after the patch (of its face) it follows.
+    added: Vec<(usize, usize)>,
+    /// The patches' names, made when a patch is first added.
+    names: Option<rustc_hash::FxHashSet<String>>,
+    /// The input's face names, by face.
+    base: Vec<Option<String>>,
     geoms: Vec<Option<FaceGeom>>,
     gone: Vec<bool>,
     at: FxHashMap<VertexId, Vec<usize>>,
@@ -213,8 +221,41 @@ impl State<'_> {
         super::width(p, self.eps) > self.eps
     }
 
-    /// Replaces patches `old` (of one face) by triangles `new` (at most as
-    /// many), the first taking the first's place, and so on.
+    /// A new patch of face `face` after patch `after`: its slot.
+    fn add(&mut self, face: u32, after: usize, t: [VertexId; 3]) -> usize {
+        let names = self.names.get_or_insert_with(|| {
+            self.out
+                .faces
+                .iter()
+                .filter_map(|f| f.name.clone())
+                .collect()
+        });
+        let name = self.base[face as usize].as_ref().map(|b| {
+            (1..)
+                .map(|k| format!("{b}.{k}"))
+                .find(|n| !names.contains(n))
+                .expect("a free name")
+        });
+        if let Some(n) = &name {
+            names.insert(n.clone());
+        }
+        let material = self.out.faces[after].material;
+        let k = self.out.faces.len();
+        self.out.faces.push(ug::Face {
+            name,
+            contours: vec![t.to_vec()],
+            material,
+        });
+        self.parent.push(face);
+        self.gone.push(false);
+        self.geoms.push(None);
+        self.added.push((after, k));
+        k
+    }
+
+    /// Replaces patches `old` (of one face) by triangles `new`, the first
+    /// taking the first's place, and so on; more triangles than patches
+    /// are added after the first.
     fn replace(&mut self, old: &[usize], new: &[[VertexId; 3]]) {
         for &k in old {
             for &v in &self.out.faces[k].contours[0] {
@@ -240,6 +281,14 @@ impl State<'_> {
                     self.geoms[k] = None;
                 }
             }
+        }
+        for t in new.iter().skip(old.len()) {
+            let k = self.add(self.parent[old[0]], old[0], *t);
+            for &v in t {
+                self.at.entry(v).or_default().push(k);
+            }
+            self.geoms[k] = geom_of(self.out, k);
+            self.changed.push(k);
         }
     }
 
@@ -338,9 +387,13 @@ pub(super) fn repair(m: &Model, out: &mut Model, parent: &[u32], eps: f64) -> Sh
             at.entry(v).or_default().push(k);
         }
     }
+    let base = m.faces.iter().map(|f| f.name.clone()).collect();
     let mut s = State {
         out,
-        parent,
+        parent: parent.to_vec(),
+        added: Vec::new(),
+        names: None,
+        base,
         geoms,
         gone: vec![false; n],
         at,
@@ -353,13 +406,13 @@ pub(super) fn repair(m: &Model, out: &mut Model, parent: &[u32], eps: f64) -> Sh
     for round in 0..ROUNDS {
         // The bad pairs now, in order.
         let mut pairs: Vec<(usize, usize)> = Vec::new();
-        for k in 0..n {
+        for k in 0..s.geoms.len() {
             let Some(g) = s.geoms[k].as_ref() else {
                 continue;
             };
             for j in s.near(g) {
                 if j > k
-                    && parent[j] != parent[k]
+                    && s.parent[j] != s.parent[k]
                     && s.geoms[j].as_ref().is_some_and(|gj| bad(g, gj, eps))
                 {
                     pairs.push((k, j));
@@ -402,29 +455,66 @@ pub(super) fn repair(m: &Model, out: &mut Model, parent: &[u32], eps: f64) -> Sh
             break;
         }
     }
-    // Drop the patches and points taken out.
-    if !removed.is_empty() || s.gone.iter().any(|&g| g) {
+    // Drop the patches and points taken out; put the patches added after
+    // those they follow (their points are all defined before).
+    if !removed.is_empty() || !s.added.is_empty() || s.gone.iter().any(|&g| g) {
         let gone = std::mem::take(&mut s.gone);
+        let mut after: FxHashMap<usize, Vec<usize>> = FxHashMap::default();
+        for &(a, k) in &s.added {
+            after.entry(a).or_default().push(k);
+        }
         let out = &mut *s.out;
-        let mut new_id = vec![u32::MAX; n];
-        let mut faces = Vec::with_capacity(n);
-        for (k, f) in std::mem::take(&mut out.faces).into_iter().enumerate() {
-            if !gone[k] {
+        let total = out.faces.len();
+        let removed: rustc_hash::FxHashSet<VertexId> = removed.into_iter().collect();
+        // The statements in order, each face by its old slot.
+        let mut items = Vec::with_capacity(out.items.len() + s.added.len());
+        for it in std::mem::take(&mut out.items) {
+            match it {
+                ug::Item::Face(f) => {
+                    items.push(ug::Item::Face(f));
+                    for &k in after.get(&f.idx()).map_or(&[][..], |v| v.as_slice()) {
+                        items.push(ug::Item::Face(ug::FaceId(k as u32)));
+                    }
+                }
+                ug::Item::Vertex(v) if removed.contains(&v) => {}
+                other => items.push(other),
+            }
+        }
+        // Faces renumbered in statement order, the gone left out.
+        let mut new_id = vec![u32::MAX; total];
+        let mut old_faces: Vec<Option<ug::Face>> = std::mem::take(&mut out.faces)
+            .into_iter()
+            .map(Some)
+            .collect();
+        let mut faces = Vec::with_capacity(total);
+        for it in &items {
+            if let ug::Item::Face(f) = it
+                && !gone[f.idx()]
+                && new_id[f.idx()] == u32::MAX
+            {
+                new_id[f.idx()] = faces.len() as u32;
+                faces.push(old_faces[f.idx()].take().expect("each face once"));
+            }
+        }
+        // (Faces not in the statements: none in a mesher's output.)
+        for (k, f) in old_faces.into_iter().enumerate() {
+            if let Some(f) = f
+                && !gone[k]
+            {
                 new_id[k] = faces.len() as u32;
                 faces.push(f);
             }
         }
         out.faces = faces;
-        let removed: rustc_hash::FxHashSet<VertexId> = removed.into_iter().collect();
-        out.items.retain_mut(|it| match it {
+        items.retain_mut(|it| match it {
             ug::Item::Face(f) => {
                 let id = new_id[f.idx()];
                 *f = ug::FaceId(id);
                 id != u32::MAX
             }
-            ug::Item::Vertex(v) => !removed.contains(v),
             _ => true,
         });
+        out.items = items;
     }
     st
 }
@@ -560,7 +650,7 @@ fn remesh(s: &mut State<'_>, p: usize, o: usize) -> Option<Vec<VertexId>> {
     let area = |q: &[DVec2]| signed(q).abs() * 0.5;
     let before: f64 = polys.iter().map(|q| area(q)).sum();
     let after_area: f64 = tris.iter().map(|t| area(&t.map(to2))).sum();
-    if (before - after_area).abs() > 1e-9 * before.max(s.eps * s.eps) || tris.len() > region.len() {
+    if (before - after_area).abs() > 1e-9 * before.max(s.eps * s.eps) {
         return None;
     }
     let now: usize = region
