@@ -202,9 +202,13 @@ pub fn coplanar(a: &FaceGeom, b: &FaceGeom, eps: f64) -> bool {
 /// leaves none that a later cut can bring within 2.
 pub const CLEAN_COPLANAR_EPSILONS: f64 = 3.0;
 
+/// The coplanar tests' angle: two faces whose unit normals' dot product is
+/// below this in magnitude (about 25.8° apart) are never coplanar.
+pub const COPLANAR_COS: f64 = 0.9;
+
 /// [`coplanar`] with the distance tolerance `tol` (absolute).
 pub fn coplanar_within(a: &FaceGeom, b: &FaceGeom, tol: f64) -> bool {
-    if a.plane.n.dot(b.plane.n).abs() < 0.9 {
+    if a.plane.n.dot(b.plane.n).abs() < COPLANAR_COS {
         return false;
     }
     let within = |g: &FaceGeom, other: &FaceGeom| {

@@ -1048,7 +1048,7 @@ fn cut_rounds(m: &Model, opts: Options, replay: bool) -> Result<(Model, Stats), 
             }
             _ => None,
         };
-        let (mut out, mut done, mut joins, next, parent) =
+        let (mut out, mut done, mut joins, next, origins) =
             mesh_all(&model, opts, stats.clone(), again.as_ref())?;
         drop(again);
         // A boundary edge a little longer than epsilon that no triangle
@@ -1077,7 +1077,13 @@ fn cut_rounds(m: &Model, opts: Options, replay: bool) -> Result<(Model, Stats), 
         });
         joins.dedup();
         if joins.is_empty() || round == 3 {
-            let sh = shallow::repair(&model, &mut out, &parent, opts.eps);
+            let sh = shallow::repair(
+                &model,
+                &mut out,
+                &origins.parent,
+                &origins.twinned,
+                opts.eps,
+            );
             if sh.flips + sh.removed > 0 {
                 done.shallow_flips = sh.flips;
                 done.shallow_points = sh.removed;
@@ -1373,9 +1379,12 @@ fn mesh_all(
     opts: Options,
     mut stats: Stats,
     reuse: Option<&reuse::Reuse<'_>>,
-) -> Result<(Model, Stats, Joins, reuse::Memo, Vec<u32>), String> {
+) -> Result<(Model, Stats, Joins, reuse::Memo, Origins), String> {
     let (edges, start, ends) = edges_at_vertices(m);
-    let mut parent: Vec<u32> = Vec::new();
+    let mut origins = Origins {
+        parent: Vec::new(),
+        twinned: vec![false; m.faces.len()],
+    };
     let mut planes = FacePlanes::new(m);
     let resting = resting_points(&mut planes, m, opts.eps, (&edges, &start, &ends));
     let mut cx = Ctx {
@@ -1416,10 +1425,9 @@ fn mesh_all(
         ..Model::default()
     };
     let mut emitted = m.vertices.len(); // vertices of cx.vertices already written
-    // A face's sorted vertices → (its normal, its patches).
-    let mut twins: FxHashMap<Vec<VertexId>, (Option<DVec3>, Patches)> = FxHashMap::default();
-    let mut edge_sum = 0.0;
-    let mut edge_count = 0usize;
+    // A face's sorted vertices → (its normal, its patches, the face).
+    let mut twins: FxHashMap<Vec<VertexId>, (Option<DVec3>, Patches, FaceId)> =
+        FxHashMap::default();
     for it in &m.items {
         match it {
             Item::Face(f) => {
@@ -1443,25 +1451,28 @@ fn mesh_all(
                         .map(|c| c.iter().map(|&v| cx.pos(v)).collect::<Vec<_>>())
                         .collect::<Vec<_>>(),
                 );
-                let twin = twins.get(&key).and_then(
-                    |(n0, p0): &(Option<DVec3>, Vec<Vec<Vec<VertexId>>>)| {
-                        let same = match (n0, normal) {
-                            (Some(a), Some(b)) => a.dot(b) > 0.0,
-                            _ => return None,
-                        };
-                        Some(if same {
-                            p0.clone()
-                        } else {
-                            p0.iter()
-                                .map(|cs| {
-                                    cs.iter()
-                                        .map(|c| c.iter().rev().copied().collect())
-                                        .collect()
-                                })
-                                .collect()
-                        })
-                    },
-                );
+                let twin =
+                    twins
+                        .get(&key)
+                        .and_then(|(n0, p0, f0): &(Option<DVec3>, Patches, FaceId)| {
+                            let same = match (n0, normal) {
+                                (Some(a), Some(b)) => a.dot(b) > 0.0,
+                                _ => return None,
+                            };
+                            origins.twinned[f0.idx()] = true;
+                            origins.twinned[f.idx()] = true;
+                            Some(if same {
+                                p0.clone()
+                            } else {
+                                p0.iter()
+                                    .map(|cs| {
+                                        cs.iter()
+                                            .map(|c| c.iter().rev().copied().collect())
+                                            .collect()
+                                    })
+                                    .collect()
+                            })
+                        });
                 let patches = match twin {
                     Some(p) => {
                         stats.twins += 1;
@@ -1511,7 +1522,7 @@ fn mesh_all(
                                 p
                             }
                         };
-                        twins.entry(key).or_insert((normal, p.clone()));
+                        twins.entry(key).or_insert((normal, p.clone(), *f));
                         p
                     }
                 };
@@ -1519,27 +1530,6 @@ fn mesh_all(
                 flush_vertices(&cx, &mut out, &mut emitted);
                 let mut k = 0;
                 for contours in patches {
-                    if contours.len() == 1 {
-                        let c = &contours[0];
-                        for i in 0..c.len() {
-                            let l = (cx.pos(c[(i + 1) % c.len()]) - cx.pos(c[i])).length();
-                            stats.min_edge = stats.min_edge.min(l);
-                            stats.max_edge = stats.max_edge.max(l);
-                            edge_sum += l;
-                            edge_count += 1;
-                        }
-                        if c.len() == 3 {
-                            stats.triangles += 1;
-                            stats.worst_angle = stats.worst_angle.min(min_angle(&[
-                                cx.pos(c[0]),
-                                cx.pos(c[1]),
-                                cx.pos(c[2]),
-                            ]));
-                        } else {
-                            stats.quads += 1;
-                        }
-                    }
-                    stats.patches += 1;
                     let name = face.name.as_ref().map(|n| {
                         loop {
                             k += 1;
@@ -1555,7 +1545,7 @@ fn mesh_all(
                         contours,
                         material: face.material,
                     });
-                    parent.push(f.0);
+                    origins.parent.push(f.0);
                     out.items.push(Item::Face(id));
                 }
             }
@@ -1572,22 +1562,24 @@ fn mesh_all(
         m.vertices.len(),
     );
     out.vertices = cx.vertices;
-    stats.mean_edge = if edge_count > 0 {
-        edge_sum / edge_count as f64
-    } else {
-        0.0
-    };
-    if edge_count == 0 {
-        stats.min_edge = 0.0;
-    }
+    recount(&out, &mut stats);
     let mut stuck = cx.stuck;
     stuck.sort_unstable();
     stuck.dedup();
-    Ok((out, stats, stuck, memo, parent))
+    Ok((out, stats, stuck, memo, origins))
 }
 
-/// The patches' counts and shape figures of `stats`, from `out` (after
-/// [`shallow::repair`] changed some).
+/// Where [`mesh_all`]'s patches came from.
+struct Origins {
+    /// Per patch, the index of its face in the meshed model.
+    parent: Vec<u32>,
+    /// Per face of the meshed model, whether its patches are another's
+    /// copied or were copied (faces on the same vertices).
+    twinned: Vec<bool>,
+}
+
+/// The patches' counts and shape figures of `stats` (patches, quads,
+/// triangles, edge lengths, worst angle), from `out`.
 fn recount(out: &Model, stats: &mut Stats) {
     let (mut quads, mut triangles, mut patches) = (0, 0, 0);
     let (mut lo, mut hi, mut sum, mut count) = (f64::INFINITY, 0.0f64, 0.0, 0usize);
@@ -1617,30 +1609,9 @@ fn recount(out: &Model, stats: &mut Stats) {
     stats.quads = quads;
     stats.triangles = triangles;
     stats.worst_angle = worst;
-    if count > 0 {
-        stats.min_edge = lo;
-        stats.max_edge = hi;
-        stats.mean_edge = sum / count as f64;
-    }
-}
-
-/// Per face of `m`, whether another top-level face has the same vertices
-/// (the mesher gives the two the same patches).
-fn twinned_faces(m: &Model) -> Vec<bool> {
-    let mut count: FxHashMap<Vec<VertexId>, u32> = FxHashMap::default();
-    let key = |f: &Face| {
-        let mut k: Vec<VertexId> = f.contours.iter().flatten().copied().collect();
-        k.sort_unstable();
-        k.dedup();
-        k
-    };
-    for f in m.top_faces() {
-        *count.entry(key(&m.faces[f.idx()])).or_default() += 1;
-    }
-    m.faces
-        .iter()
-        .map(|f| count.get(&key(f)).is_some_and(|&c| c > 1))
-        .collect()
+    stats.min_edge = if count > 0 { lo } else { 0.0 };
+    stats.max_edge = hi;
+    stats.mean_edge = if count > 0 { sum / count as f64 } else { 0.0 };
 }
 
 /// Writes vertex statements for the vertices created since the last call.

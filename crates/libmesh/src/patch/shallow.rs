@@ -27,7 +27,7 @@
 //! table leg against a column at 0.4°; docs/decisions.md.)
 
 use check::PairKind;
-use geom::intersect::{COPLANAR_EPSILONS, FaceGeom};
+use geom::intersect::{COPLANAR_COS, COPLANAR_EPSILONS, FaceGeom};
 use geom::{BoxIndex, DVec2, DVec3};
 use rustc_hash::FxHashMap;
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
@@ -36,20 +36,13 @@ use ug::{Model, VertexId};
 /// Rounds of repairs at most (each looks at every pair left).
 const ROUNDS: usize = 4;
 
-/// Faces whose planes are nearer parallel than this are looked at: the
-/// coplanar tests' angle (about 25.8°).
-const CONTACT_COS: f64 = 0.9;
-
 /// What [`repair`] did.
 #[derive(Clone, Debug, Default)]
 pub struct Shallow {
-    /// Overlapping patch pairs of faces in a shallow contact found after
-    /// meshing, flips made, and pairs left.
-    pub found: usize,
+    /// Diagonals flipped.
     pub flips: usize,
     /// Points inside faces taken out.
     pub removed: usize,
-    pub left: usize,
 }
 
 /// The faces (by index into `m.faces`) in a shallow contact with another:
@@ -108,7 +101,7 @@ fn in_contact(m: &Model, eps: f64) -> Vec<bool> {
                     };
                     // Planes within the angle, not coplanar as wholes (the
                     // check's test), and touching.
-                    if fa.plane.n.dot(fb.plane.n).abs() < CONTACT_COS
+                    if fa.plane.n.dot(fb.plane.n).abs() < COPLANAR_COS
                         || within(fa, fb)
                         || within(fb, fa)
                     {
@@ -153,6 +146,8 @@ fn bad(ga: &FaceGeom, gb: &FaceGeom, eps: f64) -> bool {
 /// (faces in a contact only), whether it is gone, and per vertex the live
 /// patches at it.
 struct State<'a> {
+    /// The meshed model (its vertices come first in `out`'s).
+    m: &'a Model,
     out: &'a mut Model,
     /// Per patch, the face of the meshed model it was made from (patches
     /// added by the repairs too).
@@ -161,16 +156,13 @@ struct State<'a> {
     added: Vec<(usize, usize)>,
     /// The patches' names, made when a patch is first added.
     names: Option<rustc_hash::FxHashSet<String>>,
-    /// The input's face names, by face.
-    base: Vec<Option<String>>,
     geoms: Vec<Option<FaceGeom>>,
     gone: Vec<bool>,
     at: FxHashMap<VertexId, Vec<usize>>,
     index: BoxIndex,
-    /// Slots whose patch the repairs replaced.
+    /// Slots whose patch the repairs replaced (and per slot whether so).
     changed: Vec<usize>,
-    /// Vertices the mesher added (ids from here on).
-    first_new: usize,
+    moved: Vec<bool>,
     eps: f64,
 }
 
@@ -230,7 +222,7 @@ impl State<'_> {
                 .filter_map(|f| f.name.clone())
                 .collect()
         });
-        let name = self.base[face as usize].as_ref().map(|b| {
+        let name = self.m.faces[face as usize].name.as_ref().map(|b| {
             (1..)
                 .map(|k| format!("{b}.{k}"))
                 .find(|n| !names.contains(n))
@@ -248,6 +240,7 @@ impl State<'_> {
         });
         self.parent.push(face);
         self.gone.push(false);
+        self.moved.push(false);
         self.geoms.push(None);
         self.added.push((after, k));
         k
@@ -272,9 +265,7 @@ impl State<'_> {
                         self.at.entry(v).or_default().push(k);
                     }
                     self.geoms[k] = geom_of(self.out, k);
-                    if !self.changed.contains(&k) {
-                        self.changed.push(k);
-                    }
+                    self.mark_moved(k);
                 }
                 None => {
                     self.gone[k] = true;
@@ -288,6 +279,13 @@ impl State<'_> {
                 self.at.entry(v).or_default().push(k);
             }
             self.geoms[k] = geom_of(self.out, k);
+            self.mark_moved(k);
+        }
+    }
+
+    fn mark_moved(&mut self, k: usize) {
+        if !self.moved[k] {
+            self.moved[k] = true;
             self.changed.push(k);
         }
     }
@@ -306,7 +304,7 @@ impl State<'_> {
     /// around it, with the polygon they make (their corners but `v`);
     /// `None` where `v` is on the face's boundary or not the mesher's.
     fn star(&self, v: VertexId, face: u32) -> Option<(Vec<usize>, Vec<VertexId>)> {
-        if v.idx() < self.first_new {
+        if v.idx() < self.m.vertices.len() {
             return None;
         }
         let around = self.at.get(&v)?;
@@ -352,10 +350,17 @@ impl State<'_> {
 /// Flips diagonals and takes out points inside faces of `out` (the
 /// patches of `m`, each made from face `parent[k]` of `m`) so that fewer
 /// patches of faces in a shallow contact overlap the other face's (see
-/// the module documentation). Faces whose patches another face copies
-/// are left alone (the copies must stay the same). Patches taken out
-/// are dropped from `out`, and so are the points.
-pub(super) fn repair(m: &Model, out: &mut Model, parent: &[u32], eps: f64) -> Shallow {
+/// the module documentation). Faces marked `twinned` (whose patches
+/// another face copies, or that copy another's) are left alone: the copies
+/// must stay the same. Patches taken out are dropped from `out`, and so
+/// are the points.
+pub(super) fn repair(
+    m: &Model,
+    out: &mut Model,
+    parent: &[u32],
+    twinned: &[bool],
+    eps: f64,
+) -> Shallow {
     let mut st = Shallow::default();
     if !out.defs.is_empty() {
         return st; // (a flat model has none; patches are renumbered below)
@@ -364,7 +369,6 @@ pub(super) fn repair(m: &Model, out: &mut Model, parent: &[u32], eps: f64) -> Sh
     if !contact.iter().any(|&c| c) {
         return st;
     }
-    let twinned = super::twinned_faces(m);
     let tol = COPLANAR_EPSILONS * eps;
     let n = out.faces.len();
     let live: Vec<bool> = (0..n)
@@ -387,23 +391,22 @@ pub(super) fn repair(m: &Model, out: &mut Model, parent: &[u32], eps: f64) -> Sh
             at.entry(v).or_default().push(k);
         }
     }
-    let base = m.faces.iter().map(|f| f.name.clone()).collect();
     let mut s = State {
+        m,
         out,
         parent: parent.to_vec(),
         added: Vec::new(),
         names: None,
-        base,
         geoms,
         gone: vec![false; n],
         at,
         index,
         changed: Vec::new(),
-        first_new: m.vertices.len(),
+        moved: vec![false; n],
         eps,
     };
     let mut removed: Vec<VertexId> = Vec::new();
-    for round in 0..ROUNDS {
+    for _ in 0..ROUNDS {
         // The bad pairs now, in order.
         let mut pairs: Vec<(usize, usize)> = Vec::new();
         for k in 0..s.geoms.len() {
@@ -419,10 +422,6 @@ pub(super) fn repair(m: &Model, out: &mut Model, parent: &[u32], eps: f64) -> Sh
                 }
             }
         }
-        if round == 0 {
-            st.found = pairs.len();
-        }
-        st.left = pairs.len();
         let mut changed = false;
         for (a, b) in pairs {
             for (p, o) in [(a, b), (b, a)] {
@@ -559,14 +558,7 @@ fn remesh(s: &mut State<'_>, p: usize, o: usize) -> Option<Vec<VertexId>> {
     let frame = region
         .iter()
         .filter_map(|&k| s.geoms[k].as_ref())
-        .map(|g| {
-            let c = &g.contours_2d[0];
-            let a = (0..c.len())
-                .map(|i| c[i].perp_dot(c[(i + 1) % c.len()]))
-                .sum::<f64>()
-                .abs();
-            (a, g.frame)
-        })
+        .map(|g| (geom::signed_area_2d(&g.contours_2d[0]).abs(), g.frame))
         .max_by(|x, y| x.0.total_cmp(&y.0))?
         .1;
     // The region's boundary: sides of its patches not shared within it.
@@ -619,11 +611,7 @@ fn remesh(s: &mut State<'_>, p: usize, o: usize) -> Option<Vec<VertexId>> {
         .iter()
         .map(|&k| s.out.faces[k].contours[0].iter().map(|&v| to2(v)).collect())
         .collect();
-    let signed = |q: &[DVec2]| -> f64 {
-        (0..q.len())
-            .map(|i| q[i].perp_dot(q[(i + 1) % q.len()]))
-            .sum::<f64>()
-    };
+    let signed = |q: &[DVec2]| geom::signed_area_2d(q);
     let sign = signed(&polys[0]).signum();
     let inside = |c: DVec2| {
         polys.iter().any(|q| {
@@ -647,7 +635,7 @@ fn remesh(s: &mut State<'_>, p: usize, o: usize) -> Option<Vec<VertexId>> {
         tris.push(t);
     }
     // The same area, or a triangle fell outside (or inside a hole).
-    let area = |q: &[DVec2]| signed(q).abs() * 0.5;
+    let area = |q: &[DVec2]| signed(q).abs();
     let before: f64 = polys.iter().map(|q| area(q)).sum();
     let after_area: f64 = tris.iter().map(|t| area(&t.map(to2))).sum();
     if (before - after_area).abs() > 1e-9 * before.max(s.eps * s.eps) {
