@@ -897,6 +897,43 @@ fn no_patch_lies_in_the_band_of_a_shallow_contact() {
     }
 }
 
+/// A stair step's bottom 4 mm below the floor it is sunk into, the same
+/// rectangle, coordinates rounded to 1 mm
+/// (fixtures/cut/step-sunk-4mm-into-a-floor-at-1mm.ug, from a CAD building
+/// of 14,000 faces with stairs): back to back on one region, which the
+/// check allows, but meshed each on its own the two overlapped (4 to 18
+/// defects at -l 0.7, 0.32 and 0.2). Now they are joined first, so the
+/// step's bottom takes the floor's patches, mirrored: every patch of one
+/// is on the same vertices as a patch of the other.
+#[test]
+fn back_to_back_near_twins_share_their_patches() {
+    let name = "cut/step-sunk-4mm-into-a-floor-at-1mm.ug";
+    cuts_cleanly(name, "0.0021", &["0.32", "0.7", "0.2", "1", "2"], 1e-9);
+    let input = std::fs::read(fixture(name)).unwrap();
+    for len in ["0.32", "0.2"] {
+        let out = run_ok("ugcut", &["-e", "0.0021", "-l", len], Some(&input));
+        let patches = |face: &str| -> Vec<Vec<String>> {
+            let mut ps: Vec<Vec<String>> = out
+                .lines()
+                .filter(|l| l.starts_with(&format!("f {face}.")))
+                .map(|l| {
+                    let mut vs: Vec<String> = l[l.find('(').unwrap() + 1..l.find(')').unwrap()]
+                        .split_whitespace()
+                        .map(str::to_string)
+                        .collect();
+                    vs.sort();
+                    vs
+                })
+                .collect();
+            ps.sort();
+            ps
+        };
+        let (floor, step) = (patches("slab1.1.i984"), patches("s1r4_4st3.0.i2.c2"));
+        assert!(floor.len() >= 2, "-l {len}: {floor:?}");
+        assert_eq!(floor, step, "-l {len}");
+    }
+}
+
 /// A 4 × 4 m ceiling at 1 mm with a k-gon hole of radius `r_eps` epsilon
 /// (epsilon 2.1 mm) and k facets, 85 mm long, leaving the hole's edge
 /// outward and down at `deg` degrees: a globe's cap under the ceiling it

@@ -1063,6 +1063,14 @@ fn cut_rounds(m: &Model, opts: Options, replay: bool) -> Result<(Model, Stats), 
         // (a T-vertex): it joins the corner (property seed 3327, a ramp's
         // needle piece 1.02 epsilon wide at a floor piece's corner).
         joins.extend(winged::weld::near_corner_joins(&model, &out, opts.eps));
+        // Back-to-back faces whose vertices pair off within 2 epsilon
+        // share their records, so the second takes the first's patches
+        // (see `near_twin_joins`).
+        joins.extend(
+            winged::weld::near_twin_joins(&model, opts.eps)
+                .into_iter()
+                .flatten(),
+        );
         // A vertex asked to join several others joins the nearest (the
         // first of its pairs is taken): property seed 9742, a triangle
         // export with a wing, where a facade sliver's corner 1.17 epsilon

@@ -1274,3 +1274,73 @@ fn a_tents_tip_joins_the_neighbour_the_test_takes() {
     assert_eq!(n, 1);
     assert_eq!(contours(&m, f(&m, "C")), ["u x y w"]);
 }
+
+/// Names of `near_twin_joins`' joins, per pair.
+fn twin_joins(src: &str, eps: f64) -> Vec<Vec<(String, String)>> {
+    let m = parse(src);
+    let name = |v: VertexId| m.vertices[v.idx()].name.clone();
+    crate::weld::near_twin_joins(&m, eps)
+        .into_iter()
+        .map(|p| p.into_iter().map(|(a, b)| (name(a), name(b))).collect())
+        .collect()
+}
+
+/// A box's foot 4 mm under the floor it stands on (epsilon 2.1 mm): the
+/// foot's corners join the floor's, the box's sides taking the move along
+/// their planes; the floor's extra point on an edge (for a neighbour) is
+/// no obstacle. Not: 5 mm apart, facing the same way, or where the move
+/// would bend a face (a wedge's thin end).
+#[test]
+fn near_twins_back_to_back_join() {
+    let floor = "v f0 0 0 3; v f1 1 0 3; v fm 1 0.4 3; v f2 1 1 3; v f3 0 1 3;\n\
+                 f floor (f0 f1 fm f2 f3);\n";
+    let boxed = |z: &str, foot: &str| {
+        format!(
+            "v b0 0 0 {z}; v b1 1 0 {z}; v b2 1 1 {z}; v b3 0 1 {z};\n\
+             v t0 0 0 3.5; v t1 1 0 3.5; v t2 1 1 3.5; v t3 0 1 3.5;\n\
+             f foot ({foot});\n\
+             f s0 (b0 b1 t1 t0); f s1 (b1 b2 t2 t1); f s2 (b2 b3 t3 t2); f s3 (b3 b0 t0 t3);\n"
+        )
+    };
+    let eps = 0.0021;
+    let src = format!("{floor}{}", boxed("2.996", "b0 b3 b2 b1"));
+    let got = twin_joins(&src, eps);
+    let pairs = |v: &[(&str, &str)]| -> Vec<(String, String)> {
+        v.iter()
+            .map(|(a, b)| (a.to_string(), b.to_string()))
+            .collect()
+    };
+    assert_eq!(
+        got,
+        vec![pairs(&[
+            ("b0", "f0"),
+            ("b1", "f1"),
+            ("b2", "f2"),
+            ("b3", "f3")
+        ])]
+    );
+    // Too far apart for one region.
+    let src = format!("{floor}{}", boxed("2.995", "b0 b3 b2 b1"));
+    assert!(twin_joins(&src, eps).is_empty());
+    // Facing the same way: coincident, ugclean's business.
+    let src = format!("{floor}{}", boxed("2.996", "b0 b1 b2 b3"));
+    assert!(twin_joins(&src, eps).is_empty());
+    // Both faces have a neighbour in their plane sharing one corner (a
+    // hexagon): either move would bend one by more than half an epsilon.
+    let hex = |p: &str, z: &str, c: &str| {
+        format!(
+            "v {p}1 1.1 0 {z}; v {p}2 1.5 -0.2 {z}; v {p}3 2 0 {z}; v {p}4 2 0.5 {z}; v {p}5 1.5 0.7 {z};\n\
+             f {p}hex ({});\n",
+            c
+        )
+    };
+    let src = format!(
+        "{floor}{}{}{}",
+        boxed("2.996", "b0 b3 b2 b1"),
+        hex("n", "3", "f1 n1 n2 n3 n4 n5"),
+        "v m1 0.8 -0.6 2.996; v m2 0.4 -0.8 2.996; v m3 0 -0.6 2.996; v m4 0.1 -0.2 2.996;\n\
+         v m5 0.5 -0.05 2.996; f mhex (b1 m5 m4 m3 m2 m1);\n",
+    );
+    let got = twin_joins(&src, eps);
+    assert!(got.is_empty(), "{got:?}");
+}

@@ -932,3 +932,272 @@ pub fn near_corner_joins(model: &Model, out: &Model, eps: f64) -> Vec<(VertexId,
     }
     joins
 }
+
+/// Back-to-back near twins: two faces facing opposite ways whose vertices
+/// pair off one to one within 2 epsilon, not all on the same records (a
+/// stair step's bottom 4 mm below the floor it is sunk into, at 1 mm with
+/// epsilon 2.1 mm; a table leg's foot, property seed 400840 on 3 × 2
+/// rooms; a globe's facets against the ceiling panel cut round them). To
+/// `ugcheck` they are one region back to back, which is sound; but meshed
+/// apart (their edges divided and their insides triangulated each on its
+/// own) their patches overlap. Joined, they share their records, and the
+/// mesher gives the second the first's patches.
+///
+/// Returns the joins `(from, to)` of each pair: the vertices of one face to
+/// their partners in the other. The face that moves is the one whose move
+/// bends the faces at its vertices less (a step's sides take its bottom's
+/// move along their own planes, the floor's other pieces would bend); on
+/// a tie the later face. A pair is left alone where, with every pair's
+/// move made, a face at a moved vertex would end more than half an
+/// epsilon off its plane and further than it was (a wedge's thin end, its
+/// two faces within 2 epsilon: joined, its end face would bend). (ugcut
+/// before meshing again; ugclean's last step.)
+pub fn near_twin_joins(model: &Model, eps: f64) -> Vec<Vec<(VertexId, VertexId)>> {
+    if !(eps.is_finite() && eps > 0.0) {
+        return Vec::new();
+    }
+    let reach = 2.0 * eps;
+    let faces: Vec<u32> = model.top_faces().map(|f| f.0).collect();
+    let verts_of = |f: u32| -> Vec<VertexId> {
+        let mut vs: Vec<VertexId> = model.faces[f as usize]
+            .contours
+            .iter()
+            .flatten()
+            .copied()
+            .collect();
+        vs.sort_unstable();
+        vs.dedup();
+        vs
+    };
+    // The faces at each vertex.
+    let mut at: FxHashMap<VertexId, Vec<u32>> = FxHashMap::default();
+    for &f in &faces {
+        for v in verts_of(f) {
+            at.entry(v).or_default().push(f);
+        }
+    }
+    // The vertices in cells of 2 epsilon.
+    let key = |p: DVec3| {
+        let q = (p / reach).floor();
+        (q.x as i64, q.y as i64, q.z as i64)
+    };
+    let mut cells: FxHashMap<(i64, i64, i64), Vec<VertexId>> = FxHashMap::default();
+    let mut used: Vec<VertexId> = at.keys().copied().collect();
+    used.sort_unstable();
+    for &v in &used {
+        cells.entry(key(model.pos(v))).or_default().push(v);
+    }
+    // The other records within 2 epsilon of `v`.
+    let near = |v: VertexId| -> Vec<VertexId> {
+        let p = model.pos(v);
+        let (x, y, z) = key(p);
+        let mut out = Vec::new();
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    for &w in cells.get(&(x + dx, y + dy, z + dz)).into_iter().flatten() {
+                        if w != v && model.pos(w).distance(p) <= reach {
+                            out.push(w);
+                        }
+                    }
+                }
+            }
+        }
+        out
+    };
+    let normal = |f: u32| -> Option<DVec3> {
+        let c = model.faces[f as usize].contours.first()?;
+        let pts: Vec<DVec3> = c.iter().map(|&v| model.pos(v)).collect();
+        newell_normal(&pts).try_normalize()
+    };
+    let deviation = |g: u32, to: &FxHashMap<VertexId, VertexId>| -> f64 {
+        let pts: Vec<Vec<DVec3>> = model.faces[g as usize]
+            .contours
+            .iter()
+            .map(|c| {
+                c.iter()
+                    .map(|v| model.pos(*to.get(v).unwrap_or(v)))
+                    .collect()
+            })
+            .collect();
+        geom::Plane::face_deviation(&pts).map_or(0.0, |(d, _)| d)
+    };
+    let unmoved = FxHashMap::default();
+    // How much further off their planes the faces at the moved vertices
+    // end (the largest increase).
+    let faces_at = |moves: &[(VertexId, VertexId)]| -> Vec<u32> {
+        let mut gs: Vec<u32> = moves
+            .iter()
+            .flat_map(|(u, _)| at[u].iter().copied())
+            .collect();
+        gs.sort_unstable();
+        gs.dedup();
+        gs
+    };
+    let bend = |moves: &[(VertexId, VertexId)]| -> f64 {
+        let to: FxHashMap<VertexId, VertexId> = moves.iter().copied().collect();
+        faces_at(moves)
+            .iter()
+            .map(|&g| deviation(g, &to) - deviation(g, &unmoved))
+            .fold(0.0, f64::max)
+    };
+    // Each pair once: its moves.
+    let mut chosen: Vec<Vec<(VertexId, VertexId)>> = Vec::new();
+    let mut seen: FxHashSet<(u32, u32)> = FxHashSet::default();
+    for &b in &faces {
+        let vb = verts_of(b);
+        // A partner face has a record near one of b's vertices at least
+        // (not all shared); most faces have none.
+        let partners: Vec<VertexId> = vb.iter().flat_map(|&u| near(u)).collect();
+        if partners.is_empty() {
+            continue;
+        }
+        let mut cands: Vec<u32> = partners
+            .iter()
+            .flat_map(|w| at.get(w).into_iter().flatten().copied())
+            .filter(|&a| a != b)
+            .collect();
+        cands.sort_unstable();
+        cands.dedup();
+        for a in cands {
+            if !seen.insert((a.min(b), a.max(b))) {
+                continue;
+            }
+            let va = verts_of(a);
+            if va == vb {
+                continue;
+            }
+            let (Some(na), Some(nb)) = (normal(a), normal(b)) else {
+                continue;
+            };
+            if na.dot(nb) > -geom::intersect::COPLANAR_COS {
+                continue;
+            }
+            // The vertices paired off: each the other's nearest within 2
+            // epsilon. One left over must lie on the other face's boundary
+            // (a point put into an edge for a neighbour: the join puts it
+            // into the other face's edge too).
+            let nearest = |u: VertexId, among: &[VertexId]| -> Option<VertexId> {
+                let p = model.pos(u);
+                among
+                    .iter()
+                    .map(|&w| (model.pos(w).distance(p), w))
+                    .filter(|&(d, _)| d <= reach)
+                    .min_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)))
+                    .map(|(_, w)| w)
+            };
+            let mut pairs: Vec<(VertexId, VertexId)> = Vec::with_capacity(vb.len());
+            let mut left_b: Vec<VertexId> = Vec::new();
+            for &u in &vb {
+                match nearest(u, &va) {
+                    Some(w) if nearest(w, &vb) == Some(u) => pairs.push((u, w)),
+                    _ => left_b.push(u),
+                }
+            }
+            if pairs.len() < 3 {
+                continue;
+            }
+            let left_a: Vec<VertexId> = va
+                .iter()
+                .copied()
+                .filter(|w| !pairs.iter().any(|p| p.1 == *w))
+                .collect();
+            // A vertex left over stays where it is; the other face's
+            // vertices move to its face, so it must lie on their moved
+            // boundary.
+            if !left_a.is_empty() && !left_b.is_empty() {
+                continue;
+            }
+            let on_boundary = |x: VertexId, f: u32, to: &dyn Fn(VertexId) -> VertexId| {
+                let p = model.pos(x);
+                model.faces[f as usize].contours.iter().any(|c| {
+                    (0..c.len()).any(|i| {
+                        let (s, t) = (model.pos(to(c[i])), model.pos(to(c[(i + 1) % c.len()])));
+                        point_segment_distance(p, s, t).0 <= eps
+                    })
+                })
+            };
+            let to_a = |v: VertexId| pairs.iter().find(|p| p.0 == v).map_or(v, |p| p.1);
+            let to_b = |v: VertexId| pairs.iter().find(|p| p.1 == v).map_or(v, |p| p.0);
+            if !left_a.iter().all(|&x| on_boundary(x, b, &to_a))
+                || !left_b.iter().all(|&x| on_boundary(x, a, &to_b))
+            {
+                continue;
+            }
+            pairs.retain(|(u, w)| u != w);
+            let back: Vec<(VertexId, VertexId)> = pairs.iter().map(|&(u, w)| (w, u)).collect();
+            // b moves onto a unless b has a vertex left over; on a tie in
+            // bending, the later face moves.
+            let b_moves = if !left_b.is_empty() {
+                false
+            } else if !left_a.is_empty() {
+                true
+            } else {
+                let (from_b, from_a) = (bend(&pairs), bend(&back));
+                from_b < from_a || (from_b == from_a && b > a)
+            };
+            chosen.push(if b_moves { pairs } else { back });
+        }
+    }
+    // With every pair's move made (a vertex moves once: the first pair
+    // that moves it, or that keeps it as a target, decides), the pairs
+    // bending a face past half an epsilon go, until none does.
+    let tol = 0.5 * eps;
+    let mut live = vec![true; chosen.len()];
+    let mut settled = false;
+    for _ in 0..8 {
+        let mut to: FxHashMap<VertexId, VertexId> = FxHashMap::default();
+        let mut fixed: FxHashSet<VertexId> = FxHashSet::default();
+        for (k, moves) in chosen.iter().enumerate() {
+            if !live[k] {
+                continue;
+            }
+            let clash = moves.iter().any(|(u, w)| {
+                fixed.contains(u) || to.contains_key(w) || to.get(u).is_some_and(|x| x != w)
+            });
+            if clash {
+                live[k] = false;
+                continue;
+            }
+            for &(u, w) in moves {
+                to.insert(u, w);
+                fixed.insert(w);
+            }
+        }
+        let all: Vec<(VertexId, VertexId)> = to.iter().map(|(&u, &w)| (u, w)).collect();
+        let bent: FxHashSet<u32> = faces_at(&all)
+            .into_iter()
+            .filter(|&g| {
+                let d = deviation(g, &to);
+                d > tol && d > deviation(g, &unmoved)
+            })
+            .collect();
+        if bent.is_empty() {
+            settled = true;
+            break;
+        }
+        let mut dropped = false;
+        for (k, moves) in chosen.iter().enumerate() {
+            if live[k]
+                && moves
+                    .iter()
+                    .any(|(u, _)| at[u].iter().any(|g| bent.contains(g)))
+            {
+                live[k] = false;
+                dropped = true;
+            }
+        }
+        if !dropped {
+            break;
+        }
+    }
+    if !settled {
+        return Vec::new();
+    }
+    chosen
+        .into_iter()
+        .zip(live)
+        .filter(|(m, l)| *l && !m.is_empty())
+        .map(|(m, _)| m)
+        .collect()
+}
