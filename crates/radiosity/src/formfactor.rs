@@ -89,9 +89,68 @@ pub struct Cell {
     pub pts: [DVec3; 4],
     pub s: [f32; 4],
     pub n: u8,
+    /// What [`Cell::quadrature`] takes of the cell's shape alone, made
+    /// once ([`Cell::new`]): a cell is weighed for every receiver near its
+    /// patch, and its normal's square root and division were a third of
+    /// the quadrature's cost.
+    geo: Geo,
 }
 
+/// A cell's unit normal, area and quadrature points (see [`Cell::new`]).
+#[derive(Clone, Copy, Debug)]
+struct Geo {
+    m: DVec3,
+    area: f64,
+    q: [DVec3; 4],
+}
+
+/// The corners' weights at each of a cell's quadrature points.
+type Weights = [[f64; 4]; 4];
+
+/// [`Weights`], a triangle's and a quad's (see [`Cell::quadrature`]).
+static WEIGHTS: std::sync::LazyLock<[Weights; 2]> = std::sync::LazyLock::new(|| {
+    let mut out = [[[0.0; 4]; 4]; 2];
+    for (t, k) in [3usize, 4].into_iter().enumerate() {
+        for (i, wi) in out[t].iter_mut().enumerate().take(k) {
+            if k == 3 {
+                *wi = [1.0 / 6.0, 1.0 / 6.0, 1.0 / 6.0, 0.0];
+                wi[i] = 4.0 / 6.0;
+            } else {
+                let g = 0.5 - 0.5 / 3f64.sqrt();
+                *wi = [g * g; 4];
+                wi[i] = (1.0 - g) * (1.0 - g);
+                wi[(i + 1) % 4] = g * (1.0 - g);
+                wi[(i + 3) % 4] = g * (1.0 - g);
+            }
+        }
+    }
+    out
+});
+
 impl Cell {
+    /// A cell of `n` corners (3 or 4; a triangle's fourth repeats its
+    /// third) with radiosity `s` there.
+    pub fn new(pts: [DVec3; 4], s: [f32; 4], n: u8) -> Cell {
+        let k = n as usize;
+        let p = &pts[..k];
+        let normal = geom::plane::newell_normal(p);
+        let w = &WEIGHTS[usize::from(k == 4)];
+        let mut q = [DVec3::ZERO; 4];
+        for (qi, wi) in q.iter_mut().zip(w).take(k) {
+            *qi = (0..k).map(|j| p[j] * wi[j]).sum::<DVec3>();
+        }
+        Cell {
+            pts,
+            s,
+            n,
+            geo: Geo {
+                m: normal.normalize_or_zero(),
+                area: 0.5 * normal.length(),
+                q,
+            },
+        }
+    }
+
     fn centroid(&self) -> DVec3 {
         let k = self.n as usize;
         self.pts[..k].iter().copied().sum::<DVec3>() / k as f64
@@ -119,27 +178,13 @@ impl Cell {
     /// density there from `x` (normal `n`), per unit area, and the weights
     /// of the corners' values there (linear over a triangle, bilinear over
     /// a quad); and the cell's area. `None` where a point is `x`.
-    fn quadrature(&self, x: DVec3, n: DVec3) -> Option<([f64; 4], [[f64; 4]; 4], f64)> {
+    fn quadrature(&self, x: DVec3, n: DVec3) -> Option<([f64; 4], &'static Weights, f64)> {
         let k = self.n as usize;
-        let p = &self.pts[..k];
-        let mut w = [[0.0; 4]; 4];
-        for (i, wi) in w.iter_mut().enumerate().take(k) {
-            if k == 3 {
-                *wi = [1.0 / 6.0, 1.0 / 6.0, 1.0 / 6.0, 0.0];
-                wi[i] = 4.0 / 6.0;
-            } else {
-                let g = 0.5 - 0.5 / 3f64.sqrt();
-                *wi = [g * g; 4];
-                wi[i] = (1.0 - g) * (1.0 - g);
-                wi[(i + 1) % 4] = g * (1.0 - g);
-                wi[(i + 3) % 4] = g * (1.0 - g);
-            }
-        }
-        let normal = geom::plane::newell_normal(p);
-        let m = normal.normalize_or_zero();
+        let w = &WEIGHTS[usize::from(k == 4)];
+        let m = self.geo.m;
         let mut dens = [0.0; 4];
-        for (o, wi) in dens.iter_mut().zip(&w).take(k) {
-            let d = (0..k).map(|j| p[j] * wi[j]).sum::<DVec3>() - x;
+        for (o, q) in dens.iter_mut().zip(&self.geo.q).take(k) {
+            let d = *q - x;
             let d2 = d.length_squared();
             if d2 <= 0.0 {
                 return None;
@@ -148,7 +193,7 @@ impl Cell {
         }
         dens.iter()
             .all(|v| v.is_finite())
-            .then_some((dens, w, 0.5 * normal.length()))
+            .then_some((dens, w, self.geo.area))
     }
 
     /// The cell's value (`self`'s, and `b`'s over the same cell) where a
@@ -159,7 +204,7 @@ impl Cell {
     /// density vanishes at every point.
     fn weighted_means(&self, b: Option<&Cell>, x: DVec3, n: DVec3) -> (f64, f64) {
         match self.quadrature(x, n) {
-            Some((dens, w, _)) => self.values_at(b, &dens, &w),
+            Some((dens, w, _)) => self.values_at(b, &dens, w),
             None => (self.mean(), b.map_or(0.0, Cell::mean)),
         }
     }
@@ -191,7 +236,7 @@ impl Cell {
         if f <= 0.0 {
             return [0.0; 3];
         }
-        let (ma, mb) = self.values_at(b, &dens, &w);
+        let (ma, mb) = self.values_at(b, &dens, w);
         [f, f * ma, f * mb]
     }
 
@@ -213,10 +258,8 @@ impl Cell {
             let (a, sa) = mp(0, 1);
             let (b, sb) = mp(1, 2);
             let (c, sc) = mp(2, 0);
-            let tri = |q: [DVec3; 3], v: [f32; 3]| Cell {
-                pts: [q[0], q[1], q[2], q[2]],
-                s: [v[0], v[1], v[2], v[2]],
-                n: 3,
+            let tri = |q: [DVec3; 3], v: [f32; 3]| {
+                Cell::new([q[0], q[1], q[2], q[2]], [v[0], v[1], v[2], v[2]], 3)
             };
             [
                 tri([p[0], a, c], [s[0], sa, sc]),
@@ -231,7 +274,7 @@ impl Cell {
             let (e3, s3) = mp(3, 0);
             let m = (p[0] + p[1] + p[2] + p[3]) * 0.25;
             let sm = (s[0] + s[1] + s[2] + s[3]) * 0.25;
-            let quad = |q: [DVec3; 4], v: [f32; 4]| Cell { pts: q, s: v, n: 4 };
+            let quad = |q: [DVec3; 4], v: [f32; 4]| Cell::new(q, v, 4);
             [
                 quad([p[0], e0, m, e3], [s[0], s0, sm, s3]),
                 quad([e0, p[1], e1, m], [s0, s[1], s1, sm]),
@@ -542,11 +585,7 @@ mod tests {
     #[test]
     fn shaped_form_factor_weighs_the_light_where_it_is() {
         let sq = square(1.0);
-        let cell = |s: [f32; 4]| Cell {
-            pts: [sq[0], sq[1], sq[2], sq[3]],
-            s,
-            n: 4,
-        };
+        let cell = |s: [f32; 4]| Cell::new([sq[0], sq[1], sq[2], sq[3]], s, 4);
         // Uniform: the plain form factor (a cell far enough not to be cut).
         let x = DVec3::new(0.5, 0.5, -20.0);
         let f = point_to_polygon(x, DVec3::Z, &sq);
@@ -567,11 +606,7 @@ mod tests {
             DVec3::new(1., 0.5, 0.),
             DVec3::new(0., 0.5, 0.),
         ];
-        let c = Cell {
-            pts: floor,
-            s: [0.2, 1.8, 1.8, 0.2],
-            n: 4,
-        };
+        let c = Cell::new(floor, [0.2, 1.8, 1.8, 0.2], 4);
         let x = DVec3::new(0.0, 0.0, 1e-7);
         let uniform = point_to_polygon(x, DVec3::X, &floor);
         let shaped = shaped_form_factor(x, DVec3::X, &floor, &[c], 24);
@@ -580,11 +615,7 @@ mod tests {
         assert!((shaped / uniform - 0.2).abs() < 0.01, "{shaped} {uniform}");
         // A triangle's cut keeps the integral of a linear field: by the
         // centroid rule for a far point.
-        let t = Cell {
-            pts: [sq[0], sq[1], sq[2], sq[2]],
-            s: [0.0, 1.0, 2.0, 2.0],
-            n: 3,
-        };
+        let t = Cell::new([sq[0], sq[1], sq[2], sq[2]], [0.0, 1.0, 2.0, 2.0], 3);
         let x = DVec3::new(0.6, 0.3, -0.05);
         let g = shaped_form_factor(x, DVec3::Z, &sq[..3], &[t], 12);
         let f = point_to_polygon(x, DVec3::Z, &sq[..3]);
@@ -603,16 +634,16 @@ mod tests {
     fn shaped_form_factor_integrates_a_linear_light() {
         let sq = square(0.0);
         let light = |p: DVec3| 0.2 + 1.6 * p.x + 0.4 * p.y;
-        let cell = Cell {
-            pts: [sq[0], sq[1], sq[2], sq[3]],
-            s: [sq[0], sq[1], sq[2], sq[3]].map(|p| light(p) as f32),
-            n: 4,
-        };
-        let tri = Cell {
-            pts: [sq[0], sq[1], sq[2], sq[2]],
-            s: [sq[0], sq[1], sq[2], sq[2]].map(|p| light(p) as f32),
-            n: 3,
-        };
+        let cell = Cell::new(
+            [sq[0], sq[1], sq[2], sq[3]],
+            [sq[0], sq[1], sq[2], sq[3]].map(|p| light(p) as f32),
+            4,
+        );
+        let tri = Cell::new(
+            [sq[0], sq[1], sq[2], sq[2]],
+            [sq[0], sq[1], sq[2], sq[2]].map(|p| light(p) as f32),
+            3,
+        );
         let grid = 256;
         let h = 1.0 / grid as f64;
         for (x, nrm) in [
@@ -671,11 +702,7 @@ mod tests {
                         DVec3::new(a + 0.125, b + 0.125, 0.0),
                         DVec3::new(a, b + 0.125, 0.0),
                     ];
-                    Cell {
-                        pts,
-                        s: pts.map(|p| light(p) as f32),
-                        n: 4,
-                    }
+                    Cell::new(pts, pts.map(|p| light(p) as f32), 4)
                 })
                 .collect();
             let far = tiles.iter().filter(|c| c.smooth_for(x)).count();
@@ -691,16 +718,8 @@ mod tests {
     fn the_pair_is_each_shape_on_its_own() {
         let sq = square(1.0);
         let a = [
-            Cell {
-                pts: [sq[0], sq[1], sq[2], sq[3]],
-                s: [0.2, 1.8, 1.8, 0.2],
-                n: 4,
-            },
-            Cell {
-                pts: [sq[0], sq[1], sq[2], sq[2]],
-                s: [0.0, 1.0, 2.0, 2.0],
-                n: 3,
-            },
+            Cell::new([sq[0], sq[1], sq[2], sq[3]], [0.2, 1.8, 1.8, 0.2], 4),
+            Cell::new([sq[0], sq[1], sq[2], sq[2]], [0.0, 1.0, 2.0, 2.0], 3),
         ];
         let mut b = a;
         b[0].s = [1.5, 0.5, 0.0, 2.0];

@@ -3297,13 +3297,9 @@ fn cells_of(
         .iter()
         .map(|&l| {
             let cs = mesh.elem_corners(l);
-            let mut cell = Cell {
-                pts: [DVec3::ZERO; 4],
-                s: [0.0; 4],
-                n: cs.len() as u8,
-            };
+            let (mut pts, mut s) = ([DVec3::ZERO; 4], [0.0f32; 4]);
             for (k, &v) in cs.iter().enumerate() {
-                cell.pts[k] = mesh.vertex_pos(v);
+                pts[k] = mesh.vertex_pos(v);
                 let mut leaf = l;
                 while let Some(ch) = mesh.elem_children(leaf) {
                     leaf = ch
@@ -3313,13 +3309,13 @@ fn cells_of(
                 }
                 let r = value(leaf, v) / mean;
                 uniform &= (r - w).abs() <= 0.02;
-                cell.s[k] = r as f32;
+                s[k] = r as f32;
             }
             if cs.len() == 3 {
-                cell.pts[3] = cell.pts[2];
-                cell.s[3] = cell.s[2];
+                pts[3] = pts[2];
+                s[3] = s[2];
             }
-            cell
+            Cell::new(pts, s, cs.len() as u8)
         })
         .collect();
     (!uniform).then_some(cells)
