@@ -17,7 +17,10 @@
 # 3), OBLIQUE=1 (with an oblique wing and a pitched roof: ugbuilding --wing
 # --pitched), TRIANGLES=1 (the building exported as triangles: ugbuilding
 # --triangles), STAIRS=1 (stairs and ramps: ugbuilding --stairs), CURVED=1 (round
-# columns, globe lamps and pipes: ugbuilding --curved), LEN (ugcut -l; default ugcut's, 2% of the diagonal), KEEP=1 keeps the
+# columns, globe lamps and pipes: ugbuilding --curved), ROUND=K (every
+# coordinate rounded to K decimals, as an export with a fixed precision
+# writes it: 3 is whole millimetres; the tools then take 2.1 times that
+# precision as their epsilon), LEN (ugcut -l; default ugcut's, 2% of the diagonal), KEEP=1 keeps the
 # directory of models, NO_BUILD=1 uses target/release as it is.
 
 set -euo pipefail
@@ -77,8 +80,19 @@ for n in "${sizes[@]}"; do
     d="$tmp/$n"
     mkdir -p "$d"
     "$bin/ugbuilding" --cad --faces "$n" --storeys "$storeys" --seed "$SEED" ${TRIANGLES:+--triangles} ${OBLIQUE:+--wing --pitched} ${STAIRS:+--stairs} ${CURVED:+--curved} -o "$d/0.ug"
+    if [ -n "${ROUND:-}" ]; then
+        python3 -c '
+import re, sys
+k = int(sys.argv[1])
+def r(m):
+    xs = " ".join(repr(round(float(x), k) + 0.0) for x in m.group(2).split())
+    return "v %s %s;" % (m.group(1), xs)
+sys.stdout.write(re.sub(r"^v (\S+) ([^;]*);", r, sys.stdin.read(), flags=re.M))
+' "$ROUND" < "$d/0.ug" > "$d/rounded.ug"
+        mv "$d/rounded.ug" "$d/0.ug"
+    fi
     echo
-    echo "### ugbuilding --cad --faces $n --storeys $storeys --seed $SEED${TRIANGLES:+ --triangles}${OBLIQUE:+ --wing --pitched}${STAIRS:+ --stairs}${CURVED:+ --curved}: $(faces "$d/0.ug") faces"
+    echo "### ugbuilding --cad --faces $n --storeys $storeys --seed $SEED${TRIANGLES:+ --triangles}${OBLIQUE:+ --wing --pitched}${STAIRS:+ --stairs}${CURVED:+ --curved}${ROUND:+, rounded to $ROUND decimals}: $(faces "$d/0.ug") faces"
     echo
     echo "| stage | faces in → out | s | peak MB |"
     echo "|---|---:|---:|---:|"
