@@ -848,6 +848,51 @@ pub fn split_edges_in(mesh: &mut Mesh, eps: f64, region: Option<&Region>) -> Spl
     st
 }
 
+/// For each of `used` (vertices of `model`, in id order) that has any, the
+/// others of `used` more than `min` and at most `max` from it, found in
+/// cells of `max` (each cell's vertices latest first).
+fn records_near(
+    model: &Model,
+    used: &[VertexId],
+    min: f64,
+    max: f64,
+) -> FxHashMap<VertexId, Vec<VertexId>> {
+    let key = |p: DVec3| {
+        let q = (p / max).floor();
+        (q.x as i64, q.y as i64, q.z as i64)
+    };
+    // Cells, each a list through `next` (index into `used`).
+    const NONE: u32 = u32::MAX;
+    let mut head: FxHashMap<(i64, i64, i64), u32> = FxHashMap::default();
+    let mut next = vec![NONE; used.len()];
+    for (i, &v) in used.iter().enumerate() {
+        let h = head.entry(key(model.pos(v))).or_insert(NONE);
+        next[i] = *h;
+        *h = i as u32;
+    }
+    let mut partners: FxHashMap<VertexId, Vec<VertexId>> = FxHashMap::default();
+    for &v in used {
+        let p = model.pos(v);
+        let (x, y, z) = key(p);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let mut i = head.get(&(x + dx, y + dy, z + dz)).copied().unwrap_or(NONE);
+                    while i != NONE {
+                        let w = used[i as usize];
+                        let d = model.pos(w).distance(p);
+                        if w != v && d > min && d <= max {
+                            partners.entry(v).or_default().push(w);
+                        }
+                        i = next[i as usize];
+                    }
+                }
+            }
+        }
+    }
+    partners
+}
+
 /// The joins that remove T-vertices an edge of `out` (a patch mesh, or
 /// `model` itself) makes where it leaves a corner: a vertex of `model`
 /// more than epsilon and at most 2 epsilon from the corner (the weld left
@@ -869,40 +914,7 @@ pub fn near_corner_joins(model: &Model, out: &Model, eps: f64) -> Vec<(VertexId,
         v.dedup();
         v
     };
-    let cell = 2.0 * eps;
-    let key = |p: DVec3| {
-        let q = (p / cell).floor();
-        (q.x as i64, q.y as i64, q.z as i64)
-    };
-    // Cells of 2 epsilon, each a list through `next` (index into `used`).
-    const NONE: u32 = u32::MAX;
-    let mut head: FxHashMap<(i64, i64, i64), u32> = FxHashMap::default();
-    let mut next = vec![NONE; used.len()];
-    for (i, &v) in used.iter().enumerate() {
-        let h = head.entry(key(model.pos(v))).or_insert(NONE);
-        next[i] = *h;
-        *h = i as u32;
-    }
-    let mut partners: FxHashMap<VertexId, Vec<VertexId>> = FxHashMap::default();
-    for &v in &used {
-        let p = model.pos(v);
-        let (x, y, z) = key(p);
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    let mut i = head.get(&(x + dx, y + dy, z + dz)).copied().unwrap_or(NONE);
-                    while i != NONE {
-                        let w = used[i as usize];
-                        let d = model.pos(w).distance(p);
-                        if w != v && d > eps && d <= cell {
-                            partners.entry(v).or_default().push(w);
-                        }
-                        i = next[i as usize];
-                    }
-                }
-            }
-        }
-    }
+    let partners = records_near(model, &used, eps, 2.0 * eps);
     if partners.is_empty() {
         return Vec::new();
     }
@@ -976,35 +988,11 @@ pub fn near_twin_joins(model: &Model, eps: f64) -> Vec<Vec<(VertexId, VertexId)>
             at.entry(v).or_default().push(f);
         }
     }
-    // The vertices in cells of 2 epsilon.
-    let key = |p: DVec3| {
-        let q = (p / reach).floor();
-        (q.x as i64, q.y as i64, q.z as i64)
-    };
-    let mut cells: FxHashMap<(i64, i64, i64), Vec<VertexId>> = FxHashMap::default();
+    // The other records within 2 epsilon of each vertex that has any (at
+    // any distance: -1 is below every one).
     let mut used: Vec<VertexId> = at.keys().copied().collect();
     used.sort_unstable();
-    for &v in &used {
-        cells.entry(key(model.pos(v))).or_default().push(v);
-    }
-    // The other records within 2 epsilon of `v`.
-    let near = |v: VertexId| -> Vec<VertexId> {
-        let p = model.pos(v);
-        let (x, y, z) = key(p);
-        let mut out = Vec::new();
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    for &w in cells.get(&(x + dx, y + dy, z + dz)).into_iter().flatten() {
-                        if w != v && model.pos(w).distance(p) <= reach {
-                            out.push(w);
-                        }
-                    }
-                }
-            }
-        }
-        out
-    };
+    let near = records_near(model, &used, -1.0, reach);
     let normal = |f: u32| -> Option<DVec3> {
         let c = model.faces[f as usize].contours.first()?;
         let pts: Vec<DVec3> = c.iter().map(|&v| model.pos(v)).collect();
@@ -1048,7 +1036,12 @@ pub fn near_twin_joins(model: &Model, eps: f64) -> Vec<Vec<(VertexId, VertexId)>
         let vb = verts_of(b);
         // A partner face has a record near one of b's vertices at least
         // (not all shared); most faces have none.
-        let partners: Vec<VertexId> = vb.iter().flat_map(|&u| near(u)).collect();
+        let partners: Vec<VertexId> = vb
+            .iter()
+            .filter_map(|u| near.get(u))
+            .flatten()
+            .copied()
+            .collect();
         if partners.is_empty() {
             continue;
         }
