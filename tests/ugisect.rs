@@ -324,3 +324,53 @@ fn a_column_apex_just_through_a_floor_leaves_no_defect() {
         }
     }
 }
+
+/// A ceiling ending on a wall along a chord between two of the wall's
+/// vertices, 1.0 to 1.4 epsilon below the wall's top edge
+/// (fixtures/isect/ceiling-on-a-wall-chord-at-1mm.ug, property seed 170449
+/// to 1 mm). Whether the pair intersected, and the wall was cut along the
+/// chord, depended on which face came first in the file: with the wall
+/// first it was not cut, and ugcut's patches of the two intersected (6
+/// defects after `ugcut -l 0.7`). In either order now the wall is cut
+/// along the chord and ugcut leaves no defect.
+#[test]
+fn a_ceiling_on_a_wall_chord_is_cut_in_either_order() {
+    let name = "isect/ceiling-on-a-wall-chord-at-1mm.ug";
+    let src = std::fs::read_to_string(fixture(name)).unwrap();
+    let eps = ["-e", "0.0021"];
+    // The same model with the two faces in the other order.
+    let (faces, rest): (Vec<&str>, Vec<&str>) = src.lines().partition(|l| l.starts_with("f "));
+    assert_eq!(faces.len(), 2);
+    let swapped: String = rest
+        .iter()
+        .chain([faces[1], faces[0]].iter())
+        .map(|l| format!("{l}\n"))
+        .collect();
+    for model in [&src, &swapped] {
+        assert_eq!(count(&check_eps(model, &eps), "intersecting"), 1);
+        let out = assert_cut_eps(name, model, &eps, 1e-9);
+        let walls: Vec<&str> = out.lines().filter(|l| l.ends_with(" wall;")).collect();
+        assert_eq!(walls.len(), 2, "the wall is cut in two:\n{out}");
+        assert!(
+            walls
+                .iter()
+                .all(|l| l.contains("wingslab1.0.iv256") && l.contains("wingslab1.0.iv255")),
+            "both pieces end on the chord:\n{out}"
+        );
+        let cut = run_ok(
+            "ugcut",
+            &["-e", "0.0021", "-l", "0.7"],
+            Some(out.as_bytes()),
+        );
+        let r = check_eps(&cut, &eps);
+        for key in [
+            "intersecting",
+            "overlapping",
+            "tvertices",
+            "degenerate",
+            "nonpatch",
+        ] {
+            assert_eq!(count(&r, key), 0, "{key} after ugcut: {}", r[key]);
+        }
+    }
+}
