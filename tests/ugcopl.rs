@@ -419,3 +419,45 @@ fn a_globe_cap_through_a_ceiling_leaves_no_defect() {
         assert_eq!(defects(&r), 0, "-l {len}: {r}");
     }
 }
+
+/// A ceiling triangle T and a light facet L on its three corners (property
+/// seed 400830 at 1 mm, reduced to two faces;
+/// fixtures/copl/light-facet-notch-on-a-ceiling-triangle-at-1mm.ug). L's
+/// vertex p22 lies 1.1 epsilon from T's edge p16–p17 in space, but 0.97
+/// mm off T's plane, so 0.999 epsilon from the edge in T's own plane: T's
+/// arrangement rerouted its edge through p22 while L's kept its notch
+/// (p17 p22 p16), and the two pieces overlapped (4 overlapping pairs after
+/// ugcopl, 3 after ugclean, whichever face came first). Both faces are now
+/// laid out in one frame, the larger face's, and decide alike.
+#[test]
+fn faces_of_a_group_measure_a_neighbours_point_alike() {
+    let src = std::fs::read_to_string(fixture(
+        "copl/light-facet-notch-on-a-ceiling-triangle-at-1mm.ug",
+    ))
+    .unwrap();
+    let eps = "0.0021000000000000003";
+    let (head, faces) = src.split_at(src.find("\nf ").unwrap() + 1);
+    let swapped = {
+        let mut lines: Vec<&str> = faces.lines().collect();
+        lines.reverse();
+        format!("{head}{}\n", lines.join("\n"))
+    };
+    for (order, text) in [("T first", src.clone()), ("L first", swapped)] {
+        let before = check_with(&text, eps);
+        assert_eq!(count(&before, "overlapping"), 1, "{order}: {before}");
+        let cut = run_ok("ugcopl", &["-e", eps], Some(text.as_bytes()));
+        let after = check_with(&cut, eps);
+        ugkit::assert_no_defects(&after, &format!("{order}, after ugcopl"));
+        // The triangle is whole; the facet's notch is a piece of its own.
+        assert!(cut.contains("f T (p15 p16 p17) ceiling;"), "{order}: {cut}");
+        assert!(cut.contains("(p17 p22 p16) light;"), "{order}: {cut}");
+        // Area kept up to what snapping at epsilon moves (epsilon times
+        // the boundary's length, under 6 cm here).
+        for ((m0, a0), (m1, a1)) in areas(&before).iter().zip(&areas(&after)) {
+            assert_eq!(m0, m1);
+            assert!((a0 - a1).abs() <= 0.0021 * 0.06, "{order}: {m0}: {a0} → {a1}");
+        }
+        let clean = run_ok("ugclean", &["-e", eps], Some(cut.as_bytes()));
+        ugkit::assert_no_defects(&check_with(&clean, eps), &format!("{order}, after ugclean"));
+    }
+}

@@ -384,6 +384,100 @@ fn recut(m: &Model, out: Model, eps: f64, stats: &mut Stats) -> Result<Model, ug
     Ok(next)
 }
 
+/// Least |cos| between a face's normal and its group's for the face to be
+/// laid out in the group's frame (about 5°).
+const GROUP_FRAME_COS: f64 = 0.996;
+
+/// The frame each face of an overlapping pair is laid out in: that of the
+/// largest face of its group (faces joined by overlapping pairs), its
+/// normal turned to agree with the face's own (a mirror image: the pieces
+/// keep the face's orientation). `None` for a face in no pair, for the
+/// group's largest face itself, and for a face turned more than about 5°
+/// from it (a small face counts as coplanar at a larger angle; laid out
+/// in a plane so far from its own, a globe's facet at 11° to a ceiling
+/// piece made a cut that crossed another ceiling piece: property seed
+/// 400851 at 1 mm): they use their own frame.
+///
+/// Why one frame: a face's arrangement measures its neighbours' points in
+/// its own plane, projected; a neighbour's vertex up to 3 epsilon off that
+/// plane measures nearer to an edge there than in its own face's plane. A
+/// ceiling triangle and a light facet sharing an edge, the facet's next
+/// vertex 1.1 epsilon from that edge in space and 0.97 mm off the
+/// triangle's plane (1 mm rounding, epsilon 2.1 mm): in the triangle's
+/// frame the vertex was 0.999 epsilon from the edge and the triangle's edge
+/// was rerouted through it; in the facet's frame 1.1 epsilon, and the
+/// facet's notch stayed: the two pieces overlapped (property seed 400830
+/// at 1 mm). Measured in one frame, both arrangements decide alike.
+fn group_frames(
+    geoms: &[Option<geom::intersect::FaceGeom>],
+    pairs: &[(usize, usize)],
+) -> Vec<Option<geom::plane::Frame>> {
+    let n = geoms.len();
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    for &(i, j) in pairs {
+        let (a, b) = (root(&mut parent, i), root(&mut parent, j));
+        if a != b {
+            parent[a.max(b)] = a.min(b);
+        }
+    }
+    let mut frames = vec![None; n];
+    if pairs.is_empty() {
+        return frames;
+    }
+    let area: Vec<f64> = geoms
+        .iter()
+        .map(|g| g.as_ref().map_or(0.0, area_2d))
+        .collect();
+    // The largest face of each group (the first of equal ones).
+    let mut best: rustc_hash::FxHashMap<usize, usize> = Default::default();
+    let mut members = Vec::new();
+    for &(i, j) in pairs {
+        members.push(i);
+        members.push(j);
+    }
+    members.sort_unstable();
+    members.dedup();
+    for &k in &members {
+        let r = root(&mut parent, k);
+        let b = best.entry(r).or_insert(k);
+        if area[k] > area[*b] {
+            *b = k;
+        }
+    }
+    for &k in &members {
+        let b = best[&root(&mut parent, k)];
+        if b == k {
+            continue;
+        }
+        let (Some(g), Some(gb)) = (geoms[k].as_ref(), geoms[b].as_ref()) else {
+            continue;
+        };
+        let f = gb.frame;
+        let c = f.n.dot(g.frame.n);
+        if c.abs() < GROUP_FRAME_COS {
+            continue;
+        }
+        frames[k] = Some(if c > 0.0 {
+            f
+        } else {
+            geom::plane::Frame {
+                origin: f.origin,
+                u: f.u,
+                v: -f.v,
+                n: -f.n,
+            }
+        });
+    }
+    frames
+}
+
 /// Most rounds of [`copl_contact`].
 pub const MAX_ROUNDS: usize = 3;
 
@@ -453,6 +547,7 @@ fn copl_once(
         let k = c.k;
         covers[k].push(c);
     }
+    let frames = group_frames(&geoms, &pairs);
     let pos = |v: ug::VertexId| m.vertices[v.idx()].pos;
     let work: Vec<usize> = (0..faces.len())
         .filter(|&k| !others[k].is_empty() || !covers[k].is_empty())
@@ -461,13 +556,17 @@ fn copl_once(
         .par_iter()
         .filter_map(|&k| {
             let g = geoms[k].as_ref()?;
-            let mut layout = Layout::new(g.frame);
+            let fr = frames[k].unwrap_or(g.frame);
+            let mut layout = Layout::new(fr);
             layout.contours(&m.faces[faces[k].idx()].contours, Tag::Toggle(0), pos);
             // A neighbour much bigger than this face (a storey's floor
             // with hundreds of holes under a rug) is clipped to a box around
             // this face first: only its part there can cut it.
             let (lo, hi) = geom::index::bbox(
-                g.contours_2d.iter().flatten().map(|p| p.extend(0.0)),
+                g.contours
+                    .iter()
+                    .flatten()
+                    .map(|&p| fr.to_2d(p).extend(0.0)),
                 4.0 * eps,
             );
             let (lo, hi) = (lo.truncate(), hi.truncate());
@@ -494,7 +593,7 @@ fn copl_once(
                         .map(|&v| {
                             let p = pos(v);
                             let near = own.contains(&v) || g.plane.dist(p).abs() <= eps;
-                            (g.frame.to_2d(p), near.then_some(v))
+                            (fr.to_2d(p), near.then_some(v))
                         })
                         .collect();
                     if ring
@@ -511,8 +610,14 @@ fn copl_once(
             // face's plane as fresh points (never their vertices, which lie
             // across the gap), and the grown outline.
             let mut tag = others[k].len() as u32 + 1;
+            // (Made in this face's own frame: moved into the layout's.)
             let fresh = |pts: &[geom::DVec2]| -> Vec<(geom::DVec2, Option<ug::VertexId>)> {
-                pts.iter().map(|&p| (p, None)).collect()
+                pts.iter()
+                    .map(|&p| match frames[k] {
+                        Some(_) => (fr.to_2d(g.frame.to_3d(p)), None),
+                        None => (p, None),
+                    })
+                    .collect()
             };
             for c in &covers[k] {
                 for contour in &c.outline {
@@ -529,7 +634,20 @@ fn copl_once(
                 .faces
                 .iter()
                 .filter(|f| f.has(0))
-                .map(|f| layout.loops(&arr, f))
+                .map(|f| {
+                    let mut loops = layout.loops(&arr, f);
+                    if frames[k].is_some() {
+                        // New points lie on the group's plane: moved along
+                        // its normal onto this face's own plane.
+                        for p in loops.iter_mut().flatten() {
+                            if let Point::New(q) = p {
+                                let t = g.plane.dist(*q) / g.plane.n.dot(fr.n);
+                                *q -= fr.n * t;
+                            }
+                        }
+                    }
+                    loops
+                })
                 .collect();
             Some((k, pieces))
         })
