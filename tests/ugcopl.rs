@@ -455,7 +455,10 @@ fn faces_of_a_group_measure_a_neighbours_point_alike() {
         // the boundary's length, under 6 cm here).
         for ((m0, a0), (m1, a1)) in areas(&before).iter().zip(&areas(&after)) {
             assert_eq!(m0, m1);
-            assert!((a0 - a1).abs() <= 0.0021 * 0.06, "{order}: {m0}: {a0} → {a1}");
+            assert!(
+                (a0 - a1).abs() <= 0.0021 * 0.06,
+                "{order}: {m0}: {a0} → {a1}"
+            );
         }
         let clean = run_ok("ugclean", &["-e", eps], Some(cut.as_bytes()));
         ugkit::assert_no_defects(&check_with(&clean, eps), &format!("{order}, after ugclean"));

@@ -897,6 +897,25 @@ fn no_patch_lies_in_the_band_of_a_shallow_contact() {
     }
 }
 
+/// A pipe's two strip facets ending on a round column, coordinates rounded
+/// to 1 mm (fixtures/cut/pipe-strip-foot-beside-a-fold-at-1mm.ug, property
+/// seed 170565): one facet ends along two of the column's edges, the first
+/// folded back onto the column at 24°, and its far end vertex put a foot
+/// on its long side 10 mm from the column. The triangle of the folded edge
+/// and that foot lay within 2 epsilon of the column's plane and overlapped
+/// the column's patch (one overlapping pair at -l 0.7). A foot within the
+/// fold band of one of its face's edges next to the foot's edge is not
+/// taken now.
+#[test]
+fn no_foot_lies_in_the_band_of_a_fold_beside_its_edge() {
+    cuts_cleanly(
+        "cut/pipe-strip-foot-beside-a-fold-at-1mm.ug",
+        "0.0021",
+        &["0.7", "0.32", "0.2", "0.05", "2"],
+        1e-9,
+    );
+}
+
 /// A stair step's bottom 4 mm below the floor it is sunk into, the same
 /// rectangle, coordinates rounded to 1 mm
 /// (fixtures/cut/step-sunk-4mm-into-a-floor-at-1mm.ug, from a CAD building

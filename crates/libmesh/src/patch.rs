@@ -505,7 +505,9 @@ type Strip = ((VertexId, VertexId), (VertexId, VertexId), FaceId);
 /// hanging from the ceiling at 24°, its cut line meeting a light panel's
 /// edge in the ceiling at 67°; the foot of the line's next vertex on the
 /// panel's edge, 4.6 epsilon from the corner, made a triangle there that
-/// overlapped the globe's).
+/// overlapped the globe's). Nor where the foot lies within such a fold's
+/// band of one of the face's edges next to the foot's own edge
+/// ([`folded_beside`]).
 fn feet_and_thin(m: &Model, eps: f64, planes: &FacePlanes) -> (Feet, Thin) {
     let (mut out, mut thin) = (Feet::default(), Thin::default());
     if eps.is_nan() || eps <= 0.0 {
@@ -605,7 +607,10 @@ fn feet_and_thin(m: &Model, eps: f64, planes: &FacePlanes) -> (Feet, Thin) {
                     (e.0 == g.0 || e.0 == g.1 || e.1 == g.0 || e.1 == g.1)
                         && (m.pos(e.0).distance(m.pos(e.1)) < JOG * eps || folded(e))
                 };
-                if d > eps && !mine.clone().any(corner) {
+                if d > eps
+                    && !mine.clone().any(corner)
+                    && !folded_beside(m, planes, f, g, p + (q - p) * t, eps)
+                {
                     out.entry(g).or_default().push(t);
                 }
             }
@@ -667,6 +672,41 @@ fn feet_and_thin(m: &Model, eps: f64, planes: &FacePlanes) -> (Feet, Thin) {
     }
     out.retain(|_, ts| !ts.is_empty());
     (out, thin)
+}
+
+/// Whether a foot at `x` on face `f`'s contour edge `g` lies within the
+/// fold band of one of `f`'s edges next to `g` ([`folded_near`]): `f`'s
+/// triangle on that folded edge would take the foot as its apex and lie
+/// within 2 epsilon of the other face's plane, on its patches. (Property
+/// seed 170565 at 1 mm: a pipe's strip facet ending on a round column
+/// along two of the column's edges, the first folded back onto the column
+/// at 24°; the far end vertex put a foot on the strip's long side 10 mm
+/// from the column, and the triangle of the folded edge and that foot
+/// overlapped the column's patch.) Only `f`'s own edges count: in another
+/// face that has `g` the foot is what keeps a needle out of a narrow strip
+/// (seed 170320: a pipe facet tapering to a point, whose feet on the side
+/// it shares with the next facet lay in that facet's fold band).
+fn folded_beside(
+    m: &Model,
+    planes: &FacePlanes,
+    f: FaceId,
+    g: (VertexId, VertexId),
+    x: DVec3,
+    eps: f64,
+) -> bool {
+    let key = |a: VertexId, b: VertexId| if a < b { (a, b) } else { (b, a) };
+    m.faces[f.idx()].contours.iter().any(|c| {
+        let n = c.len();
+        (0..n).any(|i| {
+            key(c[i], c[(i + 1) % n]) == g
+                && [
+                    key(c[(i + n - 1) % n], c[i]),
+                    key(c[(i + 1) % n], c[(i + 2) % n]),
+                ]
+                .into_iter()
+                .any(|e| e != g && e.0 != e.1 && folded_near(m, planes, f, e, x, eps))
+        })
+    })
 }
 
 /// Whether another face is folded back onto face `f` along its contour
