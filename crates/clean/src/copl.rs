@@ -478,6 +478,108 @@ fn group_frames(
     frames
 }
 
+/// New points of two overlapping faces' pieces, the faces more than about
+/// 5° apart (not laid out in one frame), that lie within 2 epsilon of
+/// each other (the check's coplanar tolerance), each the other's nearest,
+/// become one point, at their midpoint. Each such face's new points lie
+/// in its own plane; where the two planes are more than epsilon apart
+/// there, the pieces of one region got corners 1 to 2 epsilon apart, too
+/// far for the welding at epsilon, and overlapped instead of coinciding
+/// (the CAD building of seed 2 at 1 mm: a pipe's end cap, a chord across
+/// a round column's hole facets 3.7 mm inside them, cut at the same
+/// crossings in both). The midpoint is within epsilon of both planes.
+fn share_near_new_points(
+    mut results: Vec<(usize, Vec<Vec<Vec<Point>>>)>,
+    others: &[Vec<usize>],
+    geoms: &[Option<geom::intersect::FaceGeom>],
+    eps: f64,
+) -> Vec<(usize, Vec<Vec<Vec<Point>>>)> {
+    use geom::DVec3;
+    let reach = 2.0 * eps;
+    if reach.is_nan() || reach <= 0.0 {
+        return results;
+    }
+    // Each face's distinct new points: (point, face).
+    let mut pts: Vec<(DVec3, usize)> = Vec::new();
+    for (k, pieces) in &results {
+        let mut seen: rustc_hash::FxHashSet<[u64; 3]> = Default::default();
+        for p in pieces.iter().flatten().flatten() {
+            if let Point::New(q) = p
+                && seen.insert(q.to_array().map(f64::to_bits))
+            {
+                pts.push((*q, *k));
+            }
+        }
+    }
+    if pts.len() < 2 {
+        return results;
+    }
+    let index = geom::index::BoxIndex::new(
+        pts.iter()
+            .enumerate()
+            .map(|(i, &(p, _))| (p - DVec3::splat(reach), p + DVec3::splat(reach), i as u32)),
+    );
+    // The nearest new point of an overlapping face within reach.
+    let nearest = |i: usize| -> Option<usize> {
+        let (p, k) = pts[i];
+        let mut best: Option<(f64, usize)> = None;
+        for j in index.query(p, p) {
+            let (q, kj) = pts[j as usize];
+            if kj == k || !others[k].contains(&kj) {
+                continue;
+            }
+            // Faces within about 5° of each other share a frame: their
+            // crossings are one point already, and points 1 to 2 epsilon
+            // apart there are different corners (slivers of an oblique
+            // wall's pieces, property seed 170692 at 1 mm).
+            if let (Some(a), Some(b)) = (geoms[k].as_ref(), geoms[kj].as_ref())
+                && a.plane.n.dot(b.plane.n).abs() >= GROUP_FRAME_COS
+            {
+                continue;
+            }
+            let d = p.distance(q);
+            if d > reach || d == 0.0 {
+                continue;
+            }
+            if best.is_none_or(|(bd, bj)| d < bd || (d == bd && (j as usize) < bj)) {
+                best = Some((d, j as usize));
+            }
+        }
+        best.map(|b| b.1)
+    };
+    let near: Vec<Option<usize>> = (0..pts.len()).map(nearest).collect();
+    let mut moved: rustc_hash::FxHashMap<(usize, [u64; 3]), DVec3> = Default::default();
+    for (i, &n) in near.iter().enumerate() {
+        let Some(j) = n else {
+            continue;
+        };
+        if near[j] != Some(i) {
+            continue;
+        }
+        let (p, q) = (pts[i].0, pts[j].0);
+        // (The same bits whichever of the two is first.)
+        let mid = if (p.x, p.y, p.z) <= (q.x, q.y, q.z) {
+            (p + q) * 0.5
+        } else {
+            (q + p) * 0.5
+        };
+        moved.insert((pts[i].1, p.to_array().map(f64::to_bits)), mid);
+    }
+    if moved.is_empty() {
+        return results;
+    }
+    for (k, pieces) in &mut results {
+        for p in pieces.iter_mut().flatten().flatten() {
+            if let Point::New(q) = p
+                && let Some(&m) = moved.get(&(*k, q.to_array().map(f64::to_bits)))
+            {
+                *q = m;
+            }
+        }
+    }
+    results
+}
+
 /// Most rounds of [`copl_contact`].
 pub const MAX_ROUNDS: usize = 3;
 
@@ -652,6 +754,7 @@ fn copl_once(
             Some((k, pieces))
         })
         .collect();
+    let results = share_near_new_points(results, &others, &geoms, eps);
     let mut cut_of: Vec<Option<usize>> = vec![None; faces.len()];
     for (r, (k, _)) in results.iter().enumerate() {
         cut_of[*k] = Some(r);
