@@ -414,18 +414,8 @@ fn group_frames(
 ) -> Vec<Option<geom::plane::Frame>> {
     let n = geoms.len();
     let mut parent: Vec<usize> = (0..n).collect();
-    fn root(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
     for &(i, j) in pairs {
-        let (a, b) = (root(&mut parent, i), root(&mut parent, j));
-        if a != b {
-            parent[a.max(b)] = a.min(b);
-        }
+        crate::join(&mut parent, i, j);
     }
     let mut frames = vec![None; n];
     if pairs.is_empty() {
@@ -445,14 +435,14 @@ fn group_frames(
     members.sort_unstable();
     members.dedup();
     for &k in &members {
-        let r = root(&mut parent, k);
+        let r = crate::root(&mut parent, k);
         let b = best.entry(r).or_insert(k);
         if area[k] > area[*b] {
             *b = k;
         }
     }
     for &k in &members {
-        let b = best[&root(&mut parent, k)];
+        let b = best[&crate::root(&mut parent, k)];
         if b == k {
             continue;
         }
@@ -478,8 +468,9 @@ fn group_frames(
     frames
 }
 
-/// New points of two overlapping faces' pieces, the faces more than about
-/// 5° apart (not laid out in one frame), that lie within 2 epsilon of
+/// New points of two overlapping faces' pieces, the faces' normals more
+/// than about 5° apart ([`GROUP_FRAME_COS`], the angle below which faces
+/// mostly share a frame, their crossings one point already), within 2 epsilon of
 /// each other (the check's coplanar tolerance), each the other's nearest,
 /// become one point, at their midpoint. Each such face's new points lie
 /// in its own plane; where the two planes are more than epsilon apart
@@ -557,13 +548,8 @@ fn share_near_new_points(
             continue;
         }
         let (p, q) = (pts[i].0, pts[j].0);
-        // (The same bits whichever of the two is first.)
-        let mid = if (p.x, p.y, p.z) <= (q.x, q.y, q.z) {
-            (p + q) * 0.5
-        } else {
-            (q + p) * 0.5
-        };
-        moved.insert((pts[i].1, p.to_array().map(f64::to_bits)), mid);
+        // (p + q is q + p to the bit: both copies move to the same point.)
+        moved.insert((pts[i].1, p.to_array().map(f64::to_bits)), (p + q) * 0.5);
     }
     if moved.is_empty() {
         return results;

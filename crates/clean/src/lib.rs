@@ -25,3 +25,22 @@ pub mod isect;
 pub mod orient;
 pub mod pieces;
 pub mod planar;
+
+/// The root of `x` in a union-find forest (`parent[r] == r` at a root),
+/// halving the path on the way.
+pub(crate) fn root(parent: &mut [usize], mut x: usize) -> usize {
+    while parent[x] != x {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
+    }
+    x
+}
+
+/// Joins the sets of `a` and `b`; the smaller root stands for both (so a
+/// set's root is its least member).
+pub(crate) fn join(parent: &mut [usize], a: usize, b: usize) {
+    let (a, b) = (root(parent, a), root(parent, b));
+    if a != b {
+        parent[a.max(b)] = a.min(b);
+    }
+}

@@ -491,27 +491,16 @@ fn automatic(
     // split off by edges it shares with an overlapping run is still one
     // wall). Enclosure is judged per object, never by a piece of one.
     let mut parent: Vec<usize> = (0..comps.len()).collect();
-    fn root(p: &mut [usize], mut x: usize) -> usize {
-        while p[x] != x {
-            p[x] = p[p[x]];
-            x = p[x];
-        }
-        x
-    }
     for e in mesh.edges() {
         let uses = &mesh.edge(e).uses;
         let first = comp[uses[0].face.idx()];
         for u in &uses[1..] {
-            let (a, b) = (
-                root(&mut parent, first),
-                root(&mut parent, comp[u.face.idx()]),
-            );
-            if a != b {
-                parent[a.max(b)] = a.min(b);
-            }
+            crate::join(&mut parent, first, comp[u.face.idx()]);
         }
     }
-    let object_of: Vec<usize> = (0..comps.len()).map(|c| root(&mut parent, c)).collect();
+    let object_of: Vec<usize> = (0..comps.len())
+        .map(|c| crate::root(&mut parent, c))
+        .collect();
 
     // Geometry with the relative flips applied.
     let samples: Vec<Option<Sample>> = (0..nf)
