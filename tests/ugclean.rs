@@ -945,6 +945,49 @@ fn a_tents_tip_joins_the_neighbour_that_makes_no_overlap() {
     }
 }
 
+/// A facade strip 4 mm high on a slab's side, at 1 mm (epsilon 2.1 mm),
+/// a tent's tip on each of its sides, where the slab's two pieces meet
+/// between its edges (fixtures/clean/facade-foot-strip-between-slab-pieces-at-1mm.ug,
+/// property seed 400886 on 3 × 2 rooms): joined to either end of its tent,
+/// a tip drags one slab piece over the strip (before: the piece below
+/// overlapped it, 6e-4). The tips are split: each piece takes the strip's
+/// corner on its own side, and the three faces share the strip's edges.
+#[test]
+fn a_tip_between_two_pieces_leaves_each_for_its_own_side() {
+    for out in clean_both_ways(
+        "clean/facade-foot-strip-between-slab-pieces-at-1mm.ug",
+        "2.1e-3",
+    ) {
+        for (face, walk) in [
+            (
+                "slab0.2.i1",
+                "s0w9p0.v1 s0w2p0.3.iv1178 s0w2p0.5.iv1194 s0w9p0.v0",
+            ),
+            (
+                "slab0.2.i4",
+                "(s0w2p0.5.iv1193 s0w2p0.3.iv1177 slab0.1.iv4 slab0.1.iv3)",
+            ),
+            (
+                "s0w9p0.2.i9",
+                "(s0w2p0.5.iv1194 s0w2p0.3.iv1178 s0w2p0.3.iv1177 s0w2p0.5.iv1193)",
+            ),
+        ] {
+            assert!(
+                out.lines()
+                    .any(|l| l.starts_with(&format!("f {face} ")) && l.contains(walk)),
+                "{face} walks {walk}:\n{out}"
+            );
+        }
+        // The tips are used by no face, and not written.
+        assert!(
+            out.lines()
+                .filter(|l| l.starts_with("v ") || l.starts_with("f "))
+                .all(|l| !l.contains("s0w2p0.v0") && !l.contains("s0w2p0.v1")),
+            "{out}"
+        );
+    }
+}
+
 /// Two tents whose tips are corners of one slab piece: each join alone
 /// keeps it planar, both in one pass bent it 1.1 epsilon
 /// (fixtures/clean/two-tents-on-one-slab-piece.ug, property seed 103186

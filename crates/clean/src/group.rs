@@ -320,7 +320,9 @@ fn collapse_tents_once(model: Model, eps: f64) -> (Model, usize, bool) {
     let mut joined = 0;
     for _ in 0..TENT_ROUNDS {
         let keeps = |mesh: &Mesh, v: VertexId, to: VertexId| join_keeps_pairs(mesh, v, to, eps);
-        let (j, _) = winged::weld::collapse_tents_with(&mut mesh, eps, &keeps);
+        let split =
+            |mesh: &Mesh, v: VertexId, ends: [VertexId; 2]| split_keeps_pairs(mesh, v, ends, eps);
+        let (j, _) = winged::weld::collapse_tents_split(&mut mesh, eps, &keeps, &split);
         joined += j;
         if j == 0 {
             break;
@@ -384,6 +386,91 @@ fn join_keeps_pairs(mesh: &Mesh, v: VertexId, to: VertexId, eps: f64) -> bool {
                 .filter(|(g, _, _)| g != f)
                 .all(|(_, gb, ga)| kind(fa, ga) <= kind(fb, gb))
         })
+}
+
+/// Where neither of a tent's ends keeps the pairs as a join
+/// ([`join_keeps_pairs`]), the end each face through the tip `v` takes
+/// so that, all moved together, every pair of faces near `v` crosses or
+/// overlaps only where it did: each face the first of `ends` (the nearer
+/// first) whose move alone keeps its pairs. `None` where a face has none,
+/// or where all take the same end (a join, which did not keep them).
+/// See [`winged::weld::collapse_tents_split`].
+fn split_keeps_pairs(
+    mesh: &Mesh,
+    v: VertexId,
+    ends: [VertexId; 2],
+    eps: f64,
+) -> Option<Vec<(FaceId, VertexId)>> {
+    use geom::intersect::FaceGeom;
+    let through = mesh.vertex_faces(v);
+    if through.len() < 2 {
+        return None;
+    }
+    let shape = |f: FaceId, to: Option<VertexId>| -> Option<FaceGeom> {
+        FaceGeom::new(
+            mesh.face(f)
+                .contours
+                .iter()
+                .map(|c| {
+                    c.iter()
+                        .map(|&u| match to {
+                            Some(t) if u == v => mesh.pos(t),
+                            _ => mesh.pos(u),
+                        })
+                        .collect()
+                })
+                .collect(),
+        )
+    };
+    let mut near: Vec<FaceId> = ends.iter().flat_map(|&t| mesh.vertex_faces(t)).collect();
+    for &f in &through {
+        for &u in mesh.face(f).contours.iter().flatten() {
+            near.extend(mesh.vertex_faces(u));
+        }
+    }
+    near.sort_unstable();
+    near.dedup();
+    let before: Vec<(FaceId, FaceGeom)> = near
+        .iter()
+        .filter_map(|&g| Some((g, shape(g, None)?)))
+        .collect();
+    let overlap: fn(check::PairKind) -> bool = |k| matches!(k, check::PairKind::Overlap(_));
+    let kind = |a: &FaceGeom, b: &FaceGeom| crate::coincident::meeting(a, b, eps, Some(overlap));
+    let was = |f: FaceId| before.iter().find(|(g, _)| *g == f).map(|(_, s)| s);
+    let mut each = Vec::with_capacity(through.len());
+    for &f in &through {
+        let fb = was(f)?;
+        let t = ends.into_iter().find(|&t| {
+            shape(f, Some(t)).is_some_and(|fa| {
+                before
+                    .iter()
+                    .filter(|(g, _)| *g != f)
+                    .all(|(_, gb)| kind(&fa, gb) <= kind(fb, gb))
+            })
+        })?;
+        each.push((f, t));
+    }
+    if each.iter().all(|e| e.1 == each[0].1) {
+        return None;
+    }
+    // All moved together.
+    let after: Vec<(FaceId, &FaceGeom, FaceGeom)> = before
+        .iter()
+        .filter_map(|(g, gb)| {
+            let to = each.iter().find(|e| e.0 == *g).map(|e| e.1);
+            Some((*g, gb, shape(*g, to)?))
+        })
+        .collect();
+    let keeps = after
+        .iter()
+        .filter(|(f, _, _)| through.contains(f))
+        .all(|(f, fb, fa)| {
+            after
+                .iter()
+                .filter(|(g, _, _)| g != f)
+                .all(|(_, gb, ga)| kind(fa, ga) <= kind(fb, gb))
+        });
+    keeps.then_some(each)
 }
 
 /// Rounds of collapsing tents and putting points back into edges in

@@ -398,7 +398,33 @@ pub fn collapse_tents_with(
     eps: f64,
     accept: &AcceptJoin<'_>,
 ) -> (usize, Vec<(FaceId, String)>) {
-    collapse_tents_impl(mesh, eps, None, Some(accept))
+    collapse_tents_impl(mesh, eps, None, Some((accept, None)))
+}
+
+/// Where a tent's tip may leave the faces through it for different
+/// neighbours (the first vertex, the tip; the second, its two neighbours
+/// in the tent): `Some` of the neighbour each face through the tip takes,
+/// or `None`.
+pub type SplitTip<'a> =
+    dyn Fn(&Mesh, VertexId, [VertexId; 2]) -> Option<Vec<(FaceId, VertexId)>> + 'a;
+
+/// [`collapse_tents_with`], and where neither neighbour fits (keeps the
+/// faces flat and passes `accept`), the tip is split as `split` says:
+/// each face through it takes the neighbour `split` gives it (in the tent
+/// itself, either: the tip just goes), where that keeps the face flat. A
+/// strip narrower than 2 epsilon between two faces sharing an edge along
+/// its middle, the strip's tents at that edge's ends: the face above takes
+/// the strip's upper corner, the face below its lower one (property seed
+/// 400886 on 3 × 2 rooms at 1 mm: a wall's foot strip 4 mm high on a
+/// slab's side, the slab's two pieces meeting 2 mm from either edge).
+/// Returns the tips joined or split, and the faces dropped.
+pub fn collapse_tents_split(
+    mesh: &mut Mesh,
+    eps: f64,
+    accept: &AcceptJoin<'_>,
+    split: &SplitTip<'_>,
+) -> (usize, Vec<(FaceId, String)>) {
+    collapse_tents_impl(mesh, eps, None, Some((accept, Some(split))))
 }
 
 /// [`collapse_tents`] on the faces of `region` (see [`Region`]).
@@ -410,18 +436,25 @@ pub fn collapse_tents_in(
     collapse_tents_impl(mesh, eps, region, None)
 }
 
+/// Passes of [`collapse_tents`] at most.
+const TENT_PASSES: usize = 4;
+
+type Tests<'a, 'b> = (&'a AcceptJoin<'b>, Option<&'a SplitTip<'b>>);
+
 fn collapse_tents_impl(
     mesh: &mut Mesh,
     eps: f64,
     region: Option<&Region>,
-    accept: Option<&AcceptJoin<'_>>,
+    tests: Option<Tests<'_, '_>>,
 ) -> (usize, Vec<(FaceId, String)>) {
+    let accept = tests.map(|t| t.0);
+    let split = tests.and_then(|t| t.1);
     let mut replaced = 0;
     let mut dropped = Vec::new();
     if eps.is_nan() || eps <= 0.0 {
         return (replaced, dropped);
     }
-    for _ in 0..4 {
+    for pass in 0..TENT_PASSES {
         let order: Vec<VertexId> = mesh.vertices().collect();
         let nv = mesh.model().vertices.len();
         let mut rank = vec![u32::MAX; nv];
@@ -429,6 +462,9 @@ fn collapse_tents_impl(
             rank[v.idx()] = k as u32;
         }
         let mut joins: Vec<(VertexId, VertexId)> = Vec::new();
+        // Tips split (see [`collapse_tents_split`]): the face, the tip and
+        // the neighbour it takes there.
+        let mut splits: Vec<(FaceId, VertexId, VertexId)> = Vec::new();
         let mut touched = vec![false; nv];
         // A join that, with the joins of this pass before it, would bend
         // a face they also move waits for the next pass, where it is
@@ -496,6 +532,35 @@ fn collapse_tents_impl(
                     } else if fits(far) || (!flat(near) && flat(far)) {
                         far
                     } else {
+                        // Neither fits: split the tip where that fits, in
+                        // a pass that moved none of its faces (the next,
+                        // where this one moved some: a strip's two tips).
+                        if split.is_some()
+                            && pass + 1 < TENT_PASSES
+                            && through.iter().any(|g| moved[g.idx()])
+                        {
+                            continue;
+                        }
+                        let each = split
+                            .and_then(|sp| sp(mesh, v, [near, far]))
+                            .filter(|each| {
+                                each.iter().all(|&(g, t)| {
+                                    !bends_with(mesh, &[g], &FxHashMap::default(), v, t, eps)
+                                })
+                            });
+                        if let Some(each) = each {
+                            for &(g, t) in &each {
+                                splits.push((g, v, t));
+                                touched[t.idx()] = true;
+                            }
+                            for x in [u, v, w] {
+                                touched[x.idx()] = true;
+                            }
+                            for g in through {
+                                moved[g.idx()] = true;
+                            }
+                            continue;
+                        }
                         near
                     };
                     let shared: Vec<FaceId> =
@@ -514,8 +579,33 @@ fn collapse_tents_impl(
                 }
             }
         }
-        if joins.is_empty() {
+        if joins.is_empty() && splits.is_empty() {
             break;
+        }
+        // A split tip leaves each face for its own neighbour; then the
+        // tip is used by none.
+        for &(g, v, t) in &splits {
+            if !mesh.is_face_live(g) {
+                continue;
+            }
+            let contours: Vec<Vec<VertexId>> = mesh
+                .face(g)
+                .contours
+                .iter()
+                .map(|c| c.iter().map(|&x| if x == v { t } else { x }).collect())
+                .collect();
+            if !mesh.set_face_contours(g, contours) {
+                dropped.push((
+                    g,
+                    "fewer than 3 distinct vertices after splitting a tent's tip".to_string(),
+                ));
+            }
+        }
+        let mut tips: Vec<VertexId> = splits.iter().map(|s| s.1).collect();
+        tips.dedup();
+        replaced += tips.len();
+        for &v in &tips {
+            mesh.remove_vertex(v); // (kept where a wire still passes it)
         }
         // Tents touch none of each other's vertices: every join is made.
         let (joined, d) = join_vertices_in(mesh, &joins, eps, region);
