@@ -916,6 +916,33 @@ fn no_foot_lies_in_the_band_of_a_fold_beside_its_edge() {
     );
 }
 
+/// A slab's side piece whose corner lies 2 mm from a wall's corner on the
+/// facade, coordinates rounded to 1 mm
+/// (fixtures/cut/slab-corner-jog-joined-across-a-facade-at-1mm.ug,
+/// property seed 170449): nothing wider than epsilon fits on the short
+/// edge between them, so ugcut joins its ends. The slab's corner joined to
+/// the wall's tilted the slab piece through the facade piece below it (one
+/// intersecting pair at every length); a join is turned round where only
+/// the other way keeps the faces from crossing, so the wall's corner joins
+/// the slab's.
+#[test]
+fn a_join_goes_the_way_that_crosses_nothing() {
+    let name = "cut/slab-corner-jog-joined-across-a-facade-at-1mm.ug";
+    // (The join moves a corner 2.8 mm: 2e-4 of the facade's area.)
+    cuts_cleanly(name, "0.0021", &["0.7", "0.2", "0.5", "2", "5"], 5e-4);
+    let input = std::fs::read(fixture(name)).unwrap();
+    let out = run_ok("ugcut", &["-e", "0.0021", "-l", "0.7"], Some(&input));
+    let body: Vec<&str> = out
+        .lines()
+        .filter(|l| l.starts_with("v ") || l.starts_with("f "))
+        .collect();
+    assert!(
+        body.iter().any(|l| l.starts_with("v slab1.v3 "))
+            && body.iter().all(|l| !l.contains("s0w3r1.v7")),
+        "{out}"
+    );
+}
+
 /// A stair step's bottom 4 mm below the floor it is sunk into, the same
 /// rectangle, coordinates rounded to 1 mm
 /// (fixtures/cut/step-sunk-4mm-into-a-floor-at-1mm.ug, from a CAD building
