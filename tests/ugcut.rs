@@ -943,6 +943,44 @@ fn a_join_goes_the_way_that_crosses_nothing() {
     );
 }
 
+/// A ramp sunk into a floor, coordinates rounded to 1 mm
+/// (fixtures/cut/ramp-toe-point-in-the-band-at-1mm.ug, from the CAD
+/// building of seed 1): its sloped top meets its flat bottom at 3.9° along
+/// the toe, back to back, within 2 epsilon of each other's plane over a
+/// band 6 cm wide. The mesher put a point inside the top 5 cm from the toe,
+/// 3.4 mm above the bottom's plane, and its patch at the toe lay wholly in
+/// the band (an overlapping pair at every length here). Taken out, the
+/// point leaves a triangle narrower than epsilon; it moves out of the band
+/// instead, towards the middle of its star. (The excerpt's edges shared
+/// with faces left out are inconsistently oriented: not counted.)
+#[test]
+fn a_point_that_cannot_go_moves_out_of_the_band() {
+    let name = "cut/ramp-toe-point-in-the-band-at-1mm.ug";
+    let input = std::fs::read(fixture(name)).unwrap();
+    let want = areas(&check_eps(&input, "0.0021"));
+    for len in ["0.7", "0.5", "1", "2"] {
+        let run = run("ugcut", &["-v", "-e", "0.0021", "-l", len], Some(&input));
+        assert!(run.status.success(), "-l {len}");
+        let err = String::from_utf8_lossy(&run.stderr);
+        let r = check_eps(&run.stdout, "0.0021");
+        for key in [
+            "nonpatch",
+            "tvertices",
+            "degenerate",
+            "overlapping",
+            "intersecting",
+        ] {
+            assert_eq!(count(&r, key), 0, "-l {len}: {key}: {}", r[key]);
+        }
+        assert!(err.contains("moved 1 "), "-l {len}: {err}");
+        // (The face's points, rounded to 1 mm, lie off its plane: the
+        // star's triangles' area moves with the point, by 5e-7 here.)
+        for (a, b) in areas(&r).iter().zip(&want) {
+            assert!((a - b).abs() <= 2e-6 * b, "-l {len}: {a} vs {b}");
+        }
+    }
+}
+
 /// A stair step's bottom 4 mm below the floor it is sunk into, the same
 /// rectangle, coordinates rounded to 1 mm
 /// (fixtures/cut/step-sunk-4mm-into-a-floor-at-1mm.ug, from a CAD building

@@ -155,7 +155,7 @@ fn main() -> std::process::ExitCode {
             report(&st, c.verbose > 0);
         }
         c.verbose(format!(
-            "welded {} vertices, joined the ends of {} short edges (faces meshed again: {}, replayed: {}), inserted {} T-vertices, took {} vertices resting inside faces as patch corners; at shallow contacts took out {} points inside faces and flipped {} diagonals; repaired {} faces, folded {} non-planar, left out {}",
+            "welded {} vertices, joined the ends of {} short edges (faces meshed again: {}, replayed: {}), inserted {} T-vertices, took {} vertices resting inside faces as patch corners; at shallow contacts took out {} points inside faces, moved {} and flipped {} diagonals; repaired {} faces, folded {} non-planar, left out {}",
             st.welded,
             st.joined,
             st.remeshed,
@@ -163,6 +163,7 @@ fn main() -> std::process::ExitCode {
             st.tvertices,
             st.resting,
             st.shallow_points,
+            st.shallow_moved,
             st.shallow_flips,
             st.repaired.len(),
             st.tessellated.len(),

@@ -125,6 +125,9 @@ pub struct Stats {
     /// Points inside faces taken out for the same reason, their patches
     /// triangulated again.
     pub shallow_points: usize,
+    /// Points inside faces moved out of the band where none could be taken
+    /// out.
+    pub shallow_moved: usize,
 }
 
 /// The default patch length: 2% of the model's bounding-box diagonal.
@@ -1133,9 +1136,10 @@ fn cut_rounds(m: &Model, opts: Options, replay: bool) -> Result<(Model, Stats), 
                 &origins.twinned,
                 opts.eps,
             );
-            if sh.flips + sh.removed > 0 {
+            if sh.flips + sh.removed + sh.moved > 0 {
                 done.shallow_flips = sh.flips;
                 done.shallow_points = sh.removed;
+                done.shallow_moved = sh.moved;
                 recount(&out, &mut done);
             }
             return Ok((out, done));

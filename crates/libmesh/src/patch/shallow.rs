@@ -18,8 +18,9 @@
 //! there (and those reached from them through their patches that also
 //! do) are taken out, and the region their patches cover is triangulated
 //! again without them (constrained Delaunay, its boundary kept): the new
-//! triangles reach out of the band. Where no point can go, a side of a
-//! triangle is flipped with the triangle of its face across it. Either is
+//! triangles reach out of the band. Where no point can go, one is moved
+//! out of the band within its star ([`relocate`]), or else a side of a
+//! triangle is flipped with the triangle of its face across it. Each is
 //! kept only where it leaves fewer such pairs and no triangle narrower than
 //! epsilon. The face's boundary and area stay, and a point inside a face
 //! is no other face's, so no T-vertex can appear. (Found with property
@@ -43,6 +44,8 @@ pub struct Shallow {
     pub flips: usize,
     /// Points inside faces taken out.
     pub removed: usize,
+    /// Points inside faces moved out of a band (where none could go).
+    pub moved: usize,
 }
 
 /// The faces (by index into `m.faces`) in a shallow contact with another:
@@ -443,6 +446,11 @@ pub(super) fn repair(
                     changed = true;
                     break;
                 }
+                if relocate(&mut s, p, o) {
+                    st.moved += 1;
+                    changed = true;
+                    break;
+                }
                 if s.out.faces[p].contours[0].len() == 3 && flip(&mut s, p) {
                     st.flips += 1;
                     changed = true;
@@ -662,6 +670,94 @@ fn remesh(s: &mut State<'_>, p: usize, o: usize) -> Option<Vec<VertexId>> {
 /// Flips the side of triangle `p` whose flip (with the triangle of the
 /// same face across it) leaves the fewest bad pairs, if that is fewer
 /// than now.
+/// Where no point of patch `p` in `o`'s band can be taken out (the
+/// triangles without it would be narrower than epsilon: a foot 5 mm
+/// along a notch's side that only the point reaches across), a point of
+/// `p` inside its face, in the band, and all of whose patches are
+/// triangles, moves towards the middle of its star (the mean of the
+/// polygon round it; a whole, three quarters or half of the way), lifted
+/// onto its face's plane: where the new place is out of the band, every
+/// triangle of the star keeps its turn in the face's frame and is wider
+/// than epsilon, and fewer of them are in pairs the check reports. The
+/// star's outline stays, so the face's area does, and the point is no
+/// other face's. (A ramp's sloped top meeting its flat bottom at 3.9° at
+/// the toe, rounded to 1 mm: a refinement point 3.4 mm above the bottom's
+/// plane, 5 cm from the toe, one overlapping pair after ugcut.)
+fn relocate(s: &mut State<'_>, p: usize, o: usize) -> bool {
+    let face = s.parent[p];
+    let Some(plane) = s.geoms[o].as_ref().map(|g| g.plane) else {
+        return false;
+    };
+    let Some(own) = geom_of(s.m, face as usize) else {
+        return false;
+    };
+    let tol = COPLANAR_EPSILONS * s.eps;
+    let corners = s.out.faces[p].contours[0].clone();
+    for v in corners {
+        let at = s.out.pos(v);
+        if plane.dist(at).abs() > tol {
+            continue;
+        }
+        let Some((star, poly)) = s.star(v, face) else {
+            continue;
+        };
+        if star.iter().any(|&k| s.out.faces[k].contours[0].len() != 3) || poly.is_empty() {
+            continue;
+        }
+        let before: usize = star
+            .iter()
+            .map(|&k| s.geoms[k].as_ref().map_or(0, |g| s.bad_count(k, g)))
+            .sum();
+        let to2 = |x: DVec3| own.frame.to_2d(x);
+        let turn = |t: [DVec2; 3]| (t[1] - t[0]).perp_dot(t[2] - t[0]);
+        let tri = |s: &State<'_>, k: usize, q: DVec3| -> [DVec2; 3] {
+            let c = &s.out.faces[k].contours[0];
+            [0, 1, 2].map(|i| to2(if c[i] == v { q } else { s.out.pos(c[i]) }))
+        };
+        let mid = poly.iter().map(|&u| s.out.pos(u)).sum::<DVec3>() / poly.len() as f64;
+        for t in [1.0, 0.75, 0.5] {
+            let q = at + (mid - at) * t;
+            let q = q - own.plane.n * own.plane.dist(q);
+            if plane.dist(q).abs() <= tol {
+                continue;
+            }
+            let sound = star.iter().all(|&k| {
+                let (old, new) = (tri(s, k, at), tri(s, k, q));
+                turn(old) * turn(new) > 0.0 && super::width(new, s.eps) > s.eps
+            });
+            if !sound {
+                continue;
+            }
+            let geoms: Vec<Option<FaceGeom>> = star
+                .iter()
+                .map(|&k| {
+                    let c = &s.out.faces[k].contours[0];
+                    FaceGeom::new(vec![
+                        c.iter()
+                            .map(|&u| if u == v { q } else { s.out.pos(u) })
+                            .collect(),
+                    ])
+                })
+                .collect();
+            let after: usize = star
+                .iter()
+                .zip(&geoms)
+                .map(|(&k, g)| g.as_ref().map_or(0, |g| s.bad_count(k, g)))
+                .sum();
+            if after >= before {
+                continue;
+            }
+            s.out.vertices[v.idx()].pos = q;
+            for (&k, g) in star.iter().zip(geoms) {
+                s.geoms[k] = g;
+                s.mark_moved(k);
+            }
+            return true;
+        }
+    }
+    false
+}
+
 fn flip(s: &mut State<'_>, p: usize) -> bool {
     let c = s.out.faces[p].contours[0].clone();
     let Some(frame) = s.geoms[p].as_ref().map(|g| g.frame) else {
