@@ -818,6 +818,20 @@ pub fn coplanar_pairs_with(
     classify(geoms, eps, Want::Coplanar, among, epsilons)
 }
 
+/// How two faces meet, as the check judges: 2 where they cross, 1 where
+/// they are coplanar and `shared` (if given) takes the kind of what they
+/// share ([`coplanar_kind`]), 0 otherwise. The cleaning tools' and the
+/// mesher's checks of a move compare it before and after.
+pub fn meeting(a: &FaceGeom, b: &FaceGeom, eps: f64, shared: Option<fn(PairKind) -> bool>) -> u8 {
+    match relate(a, b, eps) {
+        Relation::Intersect => 2,
+        Relation::Coplanar => {
+            u8::from(shared.is_some_and(|counts| coplanar_kind(a, b, eps).is_some_and(counts)))
+        }
+        Relation::Disjoint | Relation::Touch => 0,
+    }
+}
+
 /// How two faces already found coplanar share their plane: `Coincident`
 /// (the same region, facing the same way), `BackToBack` (the same region,
 /// facing opposite ways), `Overlap` (a common area over epsilon² that is

@@ -589,25 +589,8 @@ fn reshape_meets_more(
     false
 }
 
-/// How two faces meet, as ugcheck judges: 2 where they cross, 1 where
-/// they are coplanar and `shared` (if given) takes the kind of what they
-/// share, 0 otherwise. The checks of a move or reshape compare it before
-/// and after.
-pub(crate) fn meeting(
-    a: &geom::intersect::FaceGeom,
-    b: &geom::intersect::FaceGeom,
-    eps: f64,
-    shared: Option<fn(PairKind) -> bool>,
-) -> u8 {
-    use geom::intersect::{Relation, relate};
-    match relate(a, b, eps) {
-        Relation::Intersect => 2,
-        Relation::Coplanar => u8::from(
-            shared.is_some_and(|counts| check::coplanar_kind(a, b, eps).is_some_and(counts)),
-        ),
-        Relation::Disjoint | Relation::Touch => 0,
-    }
-}
+/// How two faces meet ([`check::meeting`]).
+pub(crate) use check::meeting;
 
 /// The contours of removed face `gone` with records mapped by `to`, if
 /// every contour keeps three or more distinct records and none twice.

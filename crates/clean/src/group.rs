@@ -341,51 +341,12 @@ fn collapse_tents_once(model: Model, eps: f64) -> (Model, usize, bool) {
 
 /// Whether moving `v` onto `to` leaves every pair of faces near `v` (those
 /// through it, and those sharing a vertex with them or through `to`)
-/// crossing or overlapping (as ugcheck judges) only where they did: a
+/// crossing or overlapping (as ugcheck judges) only where it did: a
 /// tent's tip joined to a neighbour sweeps the faces through it across a
 /// sliver, which may lie over a face coplanar with one of them.
 fn join_keeps_pairs(mesh: &Mesh, v: VertexId, to: VertexId, eps: f64) -> bool {
-    use geom::intersect::FaceGeom;
-    let at = mesh.pos(to);
-    let shape = |f: FaceId, moved: bool| -> Option<FaceGeom> {
-        FaceGeom::new(
-            mesh.face(f)
-                .contours
-                .iter()
-                .map(|c| {
-                    c.iter()
-                        .map(|&u| if moved && u == v { at } else { mesh.pos(u) })
-                        .collect()
-                })
-                .collect(),
-        )
-    };
-    // (The faces through `v` are among those sharing a vertex with them.)
-    let through = mesh.vertex_faces(v);
-    let mut near: Vec<FaceId> = mesh.vertex_faces(to);
-    for &f in &through {
-        for &u in mesh.face(f).contours.iter().flatten() {
-            near.extend(mesh.vertex_faces(u));
-        }
-    }
-    near.sort_unstable();
-    near.dedup();
-    // Each face before and after the move, once.
-    let shapes: Vec<(FaceId, FaceGeom, FaceGeom)> = near
-        .iter()
-        .filter_map(|&g| Some((g, shape(g, false)?, shape(g, true)?)))
-        .collect();
-    let overlap: fn(check::PairKind) -> bool = |k| matches!(k, check::PairKind::Overlap(_));
-    let kind = |a: &FaceGeom, b: &FaceGeom| crate::coincident::meeting(a, b, eps, Some(overlap));
-    shapes
-        .iter()
-        .filter(|(f, _, _)| through.contains(f))
-        .all(|(f, fb, fa)| {
-            shapes
-                .iter()
-                .filter(|(g, _, _)| g != f)
-                .all(|(_, gb, ga)| kind(fa, ga) <= kind(fb, gb))
-        })
+    let each: Vec<(FaceId, VertexId)> = mesh.vertex_faces(v).into_iter().map(|f| (f, to)).collect();
+    NearTip::new(mesh, v, &[to], eps).keeps(&each)
 }
 
 /// Where neither of a tent's ends keeps the pairs as a join
@@ -401,76 +362,115 @@ fn split_keeps_pairs(
     ends: [VertexId; 2],
     eps: f64,
 ) -> Option<Vec<(FaceId, VertexId)>> {
-    use geom::intersect::FaceGeom;
     let through = mesh.vertex_faces(v);
     if through.len() < 2 {
         return None;
     }
-    let shape = |f: FaceId, to: Option<VertexId>| -> Option<FaceGeom> {
-        FaceGeom::new(
-            mesh.face(f)
+    let near = NearTip::new(mesh, v, &ends, eps);
+    if !through
+        .iter()
+        .all(|f| near.before.iter().any(|(g, _)| g == f))
+    {
+        return None; // (a face through the tip with no shape to judge)
+    }
+    let each: Vec<(FaceId, VertexId)> = through
+        .iter()
+        .map(|&f| Some((f, ends.into_iter().find(|&t| near.keeps(&[(f, t)]))?)))
+        .collect::<Option<_>>()?;
+    if each.iter().all(|e| e.1 == each[0].1) {
+        return None;
+    }
+    near.keeps(&each).then_some(each)
+}
+
+/// The faces near a tent's tip `v` (those through it, those sharing a
+/// vertex with them, and those through the ends it may move to), each as
+/// it is, to judge the tip's moves by.
+struct NearTip<'a> {
+    mesh: &'a Mesh,
+    v: VertexId,
+    eps: f64,
+    before: Vec<(FaceId, geom::intersect::FaceGeom)>,
+}
+
+impl<'a> NearTip<'a> {
+    fn new(mesh: &'a Mesh, v: VertexId, ends: &[VertexId], eps: f64) -> Self {
+        let mut near: Vec<FaceId> = ends.iter().flat_map(|&t| mesh.vertex_faces(t)).collect();
+        for f in mesh.vertex_faces(v) {
+            for &u in mesh.face(f).contours.iter().flatten() {
+                near.extend(mesh.vertex_faces(u));
+            }
+        }
+        near.sort_unstable();
+        near.dedup();
+        let mut tip = NearTip {
+            mesh,
+            v,
+            eps,
+            before: Vec::new(),
+        };
+        tip.before = near
+            .into_iter()
+            .filter_map(|g| Some((g, tip.shape(g, None)?)))
+            .collect();
+        tip
+    }
+
+    /// Face `f` with the tip at vertex `to`'s place, or as it is.
+    fn shape(&self, f: FaceId, to: Option<VertexId>) -> Option<geom::intersect::FaceGeom> {
+        let at = to.map(|t| self.mesh.pos(t));
+        geom::intersect::FaceGeom::new(
+            self.mesh
+                .face(f)
                 .contours
                 .iter()
                 .map(|c| {
                     c.iter()
-                        .map(|&u| match to {
-                            Some(t) if u == v => mesh.pos(t),
-                            _ => mesh.pos(u),
+                        .map(|&u| match at {
+                            Some(p) if u == self.v => p,
+                            _ => self.mesh.pos(u),
                         })
                         .collect()
                 })
                 .collect(),
         )
-    };
-    let mut near: Vec<FaceId> = ends.iter().flat_map(|&t| mesh.vertex_faces(t)).collect();
-    for &f in &through {
-        for &u in mesh.face(f).contours.iter().flatten() {
-            near.extend(mesh.vertex_faces(u));
-        }
     }
-    near.sort_unstable();
-    near.dedup();
-    let before: Vec<(FaceId, FaceGeom)> = near
-        .iter()
-        .filter_map(|&g| Some((g, shape(g, None)?)))
-        .collect();
-    let overlap: fn(check::PairKind) -> bool = |k| matches!(k, check::PairKind::Overlap(_));
-    let kind = |a: &FaceGeom, b: &FaceGeom| crate::coincident::meeting(a, b, eps, Some(overlap));
-    let was = |f: FaceId| before.iter().find(|(g, _)| *g == f).map(|(_, s)| s);
-    let mut each = Vec::with_capacity(through.len());
-    for &f in &through {
-        let fb = was(f)?;
-        let t = ends.into_iter().find(|&t| {
-            shape(f, Some(t)).is_some_and(|fa| {
-                before
-                    .iter()
-                    .filter(|(g, _)| *g != f)
-                    .all(|(_, gb)| kind(&fa, gb) <= kind(fb, gb))
+
+    /// Whether moving the tip in each face of `each` to that face's vertex
+    /// leaves every pair of a moved face with another near face crossing
+    /// or overlapping (as ugcheck judges) only where it did.
+    fn keeps(&self, each: &[(FaceId, VertexId)]) -> bool {
+        use geom::intersect::FaceGeom;
+        let overlap: fn(check::PairKind) -> bool = |k| matches!(k, check::PairKind::Overlap(_));
+        let kind =
+            |a: &FaceGeom, b: &FaceGeom| crate::coincident::meeting(a, b, self.eps, Some(overlap));
+        // Each near face before and after, once.
+        let after: Vec<(FaceId, &FaceGeom, FaceGeom)> = self
+            .before
+            .iter()
+            .filter_map(|(g, gb)| {
+                let to = each.iter().find(|e| e.0 == *g).map(|e| e.1);
+                Some((
+                    *g,
+                    gb,
+                    if to.is_some() {
+                        self.shape(*g, to)?
+                    } else {
+                        gb.clone()
+                    },
+                ))
             })
-        })?;
-        each.push((f, t));
+            .collect();
+        after
+            .iter()
+            .filter(|(f, _, _)| each.iter().any(|e| e.0 == *f))
+            .all(|(f, fb, fa)| {
+                after
+                    .iter()
+                    .filter(|(g, _, _)| g != f)
+                    .all(|(_, gb, ga)| kind(fa, ga) <= kind(fb, gb))
+            })
     }
-    if each.iter().all(|e| e.1 == each[0].1) {
-        return None;
-    }
-    // All moved together.
-    let after: Vec<(FaceId, &FaceGeom, FaceGeom)> = before
-        .iter()
-        .filter_map(|(g, gb)| {
-            let to = each.iter().find(|e| e.0 == *g).map(|e| e.1);
-            Some((*g, gb, shape(*g, to)?))
-        })
-        .collect();
-    let keeps = after
-        .iter()
-        .filter(|(f, _, _)| through.contains(f))
-        .all(|(f, fb, fa)| {
-            after
-                .iter()
-                .filter(|(g, _, _)| g != f)
-                .all(|(_, gb, ga)| kind(fa, ga) <= kind(fb, gb))
-        });
-    keeps.then_some(each)
 }
 
 /// Rounds of collapsing tents and putting points back into edges in

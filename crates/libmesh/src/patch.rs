@@ -1160,7 +1160,7 @@ fn cut_rounds(m: &Model, opts: Options, replay: bool) -> Result<(Model, Stats), 
 /// of it (one overlapping pair after ugcut); the facade's corner joined
 /// to the wall's moves nothing over anything.
 fn orient_joins(m: &Model, joins: &mut [(VertexId, VertexId)], eps: f64) {
-    use geom::intersect::{FaceGeom, Relation, relate};
+    use geom::intersect::FaceGeom;
     if joins.is_empty() || eps.is_nan() || eps <= 0.0 {
         return;
     }
@@ -1214,16 +1214,8 @@ fn orient_joins(m: &Model, joins: &mut [(VertexId, VertexId)], eps: f64) {
                 .collect(),
         )
     };
-    let kind = |a: &FaceGeom, b: &FaceGeom| -> u8 {
-        match relate(a, b, eps) {
-            Relation::Intersect => 2,
-            Relation::Coplanar => u8::from(matches!(
-                check::coplanar_kind(a, b, eps),
-                Some(check::PairKind::Overlap(_))
-            )),
-            Relation::Disjoint | Relation::Touch => 0,
-        }
-    };
+    let overlap: fn(check::PairKind) -> bool = |k| matches!(k, check::PairKind::Overlap(_));
+    let kind = |a: &FaceGeom, b: &FaceGeom| check::meeting(a, b, eps, Some(overlap));
     // Whether moving `a` onto `b`'s place makes a pair worse.
     let worsens = |a: VertexId, b: VertexId| -> bool {
         let through = &at[&a];
