@@ -25,7 +25,9 @@ Examples:
 ///
 /// Last, a tent's tip (a contour vertex within epsilon of the short chord,
 /// under 2 epsilon, between its neighbours: no mesher covers it without a
-/// sliver, and ugcheck counts it as degenerate) joins its nearer neighbour.
+/// sliver, and ugcheck counts it as degenerate) joins its nearer neighbour
+/// (or the other, or each face through it takes the neighbour on its own
+/// side, where that keeps faces from crossing or overlapping).
 /// Instances are flattened first.
 #[derive(Parser, Debug)]
 #[command(version, after_help = EXAMPLES)]
