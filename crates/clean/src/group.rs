@@ -375,7 +375,11 @@ fn split_keeps_pairs(
     }
     let each: Vec<(FaceId, VertexId)> = through
         .iter()
-        .map(|&f| Some((f, ends.into_iter().find(|&t| near.keeps(&[(f, t)]))?)))
+        .map(|&f| {
+            // (A face the move leaves without a plane takes neither.)
+            let fits = |t: VertexId| near.shape(f, Some(t)).is_some() && near.keeps(&[(f, t)]);
+            Some((f, ends.into_iter().find(|&t| fits(t))?))
+        })
         .collect::<Option<_>>()?;
     if each.iter().all(|e| e.1 == each[0].1) {
         return None;
