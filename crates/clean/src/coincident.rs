@@ -565,7 +565,7 @@ fn reshape_meets_more(
         return false;
     };
     let kind = |a: &FaceGeom, b: &FaceGeom| {
-        meeting(
+        check::meeting(
             a,
             b,
             eps,
@@ -588,9 +588,6 @@ fn reshape_meets_more(
     }
     false
 }
-
-/// How two faces meet ([`check::meeting`]).
-pub(crate) use check::meeting;
 
 /// The contours of removed face `gone` with records mapped by `to`, if
 /// every contour keeps three or more distinct records and none twice.
@@ -831,7 +828,7 @@ fn snap_onto_removed(
      -> u8 {
         let counted = strict || (!kept[f as usize] && !kept[g as usize]);
         let overlap: fn(PairKind) -> bool = |k| matches!(k, PairKind::Overlap(_));
-        meeting(a, b, eps, counted.then_some(overlap))
+        check::meeting(a, b, eps, counted.then_some(overlap))
     };
     let index = std::cell::OnceCell::new();
     // Whether moving the vertices of `moved` makes a face that names one

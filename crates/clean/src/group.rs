@@ -446,33 +446,28 @@ impl<'a> NearTip<'a> {
     fn keeps(&self, each: &[(FaceId, VertexId)]) -> bool {
         use geom::intersect::FaceGeom;
         let overlap: fn(check::PairKind) -> bool = |k| matches!(k, check::PairKind::Overlap(_));
-        let kind =
-            |a: &FaceGeom, b: &FaceGeom| crate::coincident::meeting(a, b, self.eps, Some(overlap));
-        // Each near face before and after, once.
-        let after: Vec<(FaceId, &FaceGeom, FaceGeom)> = self
+        let kind = |a: &FaceGeom, b: &FaceGeom| check::meeting(a, b, self.eps, Some(overlap));
+        // Each near face before and, where it moves, after (a moved face
+        // left without a plane is not judged).
+        let after: Vec<(FaceId, &FaceGeom, Option<FaceGeom>)> = self
             .before
             .iter()
-            .filter_map(|(g, gb)| {
-                let to = each.iter().find(|e| e.0 == *g).map(|e| e.1);
-                Some((
-                    *g,
-                    gb,
-                    if to.is_some() {
-                        self.shape(*g, to)?
-                    } else {
-                        gb.clone()
-                    },
-                ))
+            .filter_map(|(g, gb)| match each.iter().find(|e| e.0 == *g) {
+                Some(&(_, t)) => Some((*g, gb, Some(self.shape(*g, Some(t))?))),
+                None => Some((*g, gb, None)),
             })
             .collect();
+        fn now<'x>(e: &'x (FaceId, &'x FaceGeom, Option<FaceGeom>)) -> &'x FaceGeom {
+            e.2.as_ref().unwrap_or(e.1)
+        }
         after
             .iter()
             .filter(|(f, _, _)| each.iter().any(|e| e.0 == *f))
-            .all(|(f, fb, fa)| {
+            .all(|x| {
                 after
                     .iter()
-                    .filter(|(g, _, _)| g != f)
-                    .all(|(_, gb, ga)| kind(fa, ga) <= kind(fb, gb))
+                    .filter(|y| y.0 != x.0)
+                    .all(|y| kind(now(x), now(y)) <= kind(x.1, y.1))
             })
     }
 }

@@ -1154,11 +1154,11 @@ fn cut_rounds(m: &Model, opts: Options, replay: bool) -> Result<(Model, Stats), 
 /// Turns a join round (`a → b` to `b → a`) where moving `a` onto `b`
 /// makes two faces cross or overlap (as ugcheck judges them: faces
 /// through `a` against those near them) that did not, and moving `b` onto
-/// `a` does not. Property seed 170656 at 1 mm: a wing's wall piece's
-/// corner, joined to a facade's corner 2.3 mm off for the facade's short
-/// edge, moved the wall piece over a sliver strip lying 3.3 mm in front
-/// of it (one overlapping pair after ugcut); the facade's corner joined
-/// to the wall's moves nothing over anything.
+/// `a` does not. Property seed 170449 at 1 mm: a slab's side piece's
+/// corner, joined to a wall's corner 2 mm off on the facade (a short edge
+/// no triangle wider than epsilon fits on), tilted the slab piece through
+/// the facade piece below it (one intersecting pair after ugcut); the
+/// wall's corner joined to the slab's crosses nothing.
 fn orient_joins(m: &Model, joins: &mut [(VertexId, VertexId)], eps: f64) {
     use geom::intersect::FaceGeom;
     if joins.is_empty() || eps.is_nan() || eps <= 0.0 {
