@@ -988,6 +988,32 @@ fn a_tip_between_two_pieces_leaves_each_for_its_own_side() {
     }
 }
 
+/// A table leg's bottom 3 mm (1.4 epsilon) under the floor at 1 mm, a
+/// quad and a triangle meeting at a tent's tip under the floor piece's
+/// corner (fixtures/clean/table-leg-stub-under-a-floor-at-1mm.ug, property
+/// seed 400811 on 3 × 2 rooms): joined to the leg's corner, the tip made
+/// the bottom the whole square, 2.4e-3 of it over the floor. Split, the
+/// triangle, which the move leaves without a plane, takes that corner and
+/// goes, and the quad takes the floor piece's corner.
+#[test]
+fn a_triangle_the_split_leaves_without_a_plane_goes() {
+    for out in clean_both_ways("clean/table-leg-stub-under-a-floor-at-1mm.ug", "2.1e-3") {
+        let faces: Vec<&str> = out.lines().filter(|l| l.starts_with("f ")).collect();
+        assert!(
+            faces.iter().any(|l| l.starts_with("f s1r0_1f0leg3.0.i1 ")
+                && l.contains("(s1r0_1f0leg3.v0 s1r0_1f0leg3.v2 s1r0_1f0leg3.v3 slab1.1.iv1260)")),
+            "the bottom's quad takes the floor piece's corner:\n{out}"
+        );
+        assert!(
+            faces
+                .iter()
+                .all(|l| !l.starts_with("f s1r0_1f0leg3.0.i2 ")
+                    && !l.contains("s1r0_1f0leg3.0.iv1149")),
+            "the triangle and the tip go:\n{out}"
+        );
+    }
+}
+
 /// Two tents whose tips are corners of one slab piece: each join alone
 /// keeps it planar, both in one pass bent it 1.1 epsilon
 /// (fixtures/clean/two-tents-on-one-slab-piece.ug, property seed 103186

@@ -667,9 +667,6 @@ fn remesh(s: &mut State<'_>, p: usize, o: usize) -> Option<Vec<VertexId>> {
     Some(gone_pts)
 }
 
-/// Flips the side of triangle `p` whose flip (with the triangle of the
-/// same face across it) leaves the fewest bad pairs, if that is fewer
-/// than now.
 /// Where no point of patch `p` in `o`'s band can be taken out (the
 /// triangles without it would be narrower than epsilon: a foot 5 mm
 /// along a notch's side that only the point reaches across), a point of
@@ -758,6 +755,9 @@ fn relocate(s: &mut State<'_>, p: usize, o: usize) -> bool {
     false
 }
 
+/// Flips the side of triangle `p` whose flip (with the triangle of the
+/// same face across it) leaves the fewest bad pairs, if that is fewer
+/// than now.
 fn flip(s: &mut State<'_>, p: usize) -> bool {
     let c = s.out.faces[p].contours[0].clone();
     let Some(frame) = s.geoms[p].as_ref().map(|g| g.frame) else {
