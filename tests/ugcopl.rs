@@ -465,6 +465,60 @@ fn faces_of_a_group_measure_a_neighbours_point_alike() {
     }
 }
 
+/// A ceiling ring round a globe's top and a globe facet at 12° to it, on
+/// the ring between its inner edge and the light panel's chord (the CAD
+/// building of seed 2 at 1 mm, reduced to two faces;
+/// fixtures/copl/globe-facet-at-12-degrees-on-a-ceiling-ring-at-1mm.ug).
+/// The ring's point iv67 lies 1.08 epsilon beyond the chord in the ring's
+/// plane but 1.9 mm off the facet's, so 0.91 epsilon from the chord in the
+/// facet's plane: the facet (too far turned to be laid out in the ring's
+/// frame) rerouted its edge through iv67 and the ring did not (2
+/// overlapping pairs after ugcopl, 1 after ugclean). The facet now
+/// measures the ring's points where the ring's normal through them meets
+/// its plane, and both decide alike.
+#[test]
+fn a_turned_face_measures_a_neighbours_point_along_the_groups_normal() {
+    let src = std::fs::read_to_string(fixture(
+        "copl/globe-facet-at-12-degrees-on-a-ceiling-ring-at-1mm.ug",
+    ))
+    .unwrap();
+    let eps = "0.0021000000000000003";
+    let (head, faces) = src.split_at(src.find("\nf ").unwrap() + 1);
+    let swapped = {
+        let mut lines: Vec<&str> = faces.lines().collect();
+        lines.reverse();
+        format!("{head}{}\n", lines.join("\n"))
+    };
+    for (order, text) in [("ring first", src.clone()), ("facet first", swapped)] {
+        let before = check_with(&text, eps);
+        assert_eq!(count(&before, "overlapping"), 1, "{order}: {before}");
+        let cut = run_ok("ugcopl", &["-e", eps], Some(text.as_bytes()));
+        ugkit::assert_no_defects(&check_with(&cut, eps), &format!("{order}, after ugcopl"));
+        // The facet keeps its shape, without iv67; the ring's part beyond
+        // the chord is a piece of its own.
+        let facet: Vec<&str> = cut
+            .lines()
+            .filter(|l| l.starts_with("f s0r6_4gl."))
+            .collect();
+        assert_eq!(
+            facet,
+            [
+                "f s0r6_4gl.n1.i3 (slab1.0.iv3794 slab1.0.iv3792 s0r6_4panel.iv14217 s0r6_4panel.iv14219) light;"
+            ],
+            "{order}: {cut}"
+        );
+        assert!(
+            cut.lines().any(|l| l.starts_with("f slab1.0.i329.i5.")
+                && l.ends_with(
+                    "(s0r6_4panel.iv14217 s0r6_4panel.iv14219 slab1.0.i329.iv67) ceiling;"
+                )),
+            "{order}: {cut}"
+        );
+        let clean = run_ok("ugclean", &["-e", eps], Some(cut.as_bytes()));
+        ugkit::assert_no_defects(&check_with(&clean, eps), &format!("{order}, after ugclean"));
+    }
+}
+
 /// A round column's facets where a pipe enters it and the pipe's end cap
 /// in two halves, flat chords across the facets up to 1.8 epsilon inside
 /// them (the CAD building of seed 2 at 1 mm, ugisect's output reduced to
