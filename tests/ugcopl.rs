@@ -420,6 +420,17 @@ fn a_globe_cap_through_a_ceiling_leaves_no_defect() {
     }
 }
 
+/// A fixture's text as it is and with its faces in the opposite order
+/// (the faces are its last lines).
+fn both_face_orders(path: &str) -> (String, String) {
+    let src = std::fs::read_to_string(fixture(path)).unwrap();
+    let (head, faces) = src.split_at(src.find("\nf ").unwrap() + 1);
+    let mut lines: Vec<&str> = faces.lines().collect();
+    lines.reverse();
+    let swapped = format!("{head}{}\n", lines.join("\n"));
+    (src, swapped)
+}
+
 /// A ceiling triangle T and a light facet L on its three corners (property
 /// seed 400830 at 1 mm, reduced to two faces;
 /// fixtures/copl/light-facet-notch-on-a-ceiling-triangle-at-1mm.ug). L's
@@ -431,18 +442,9 @@ fn a_globe_cap_through_a_ceiling_leaves_no_defect() {
 /// laid out in one frame, the larger face's, and decide alike.
 #[test]
 fn faces_of_a_group_measure_a_neighbours_point_alike() {
-    let src = std::fs::read_to_string(fixture(
-        "copl/light-facet-notch-on-a-ceiling-triangle-at-1mm.ug",
-    ))
-    .unwrap();
+    let (src, swapped) = both_face_orders("copl/light-facet-notch-on-a-ceiling-triangle-at-1mm.ug");
     let eps = "0.0021000000000000003";
-    let (head, faces) = src.split_at(src.find("\nf ").unwrap() + 1);
-    let swapped = {
-        let mut lines: Vec<&str> = faces.lines().collect();
-        lines.reverse();
-        format!("{head}{}\n", lines.join("\n"))
-    };
-    for (order, text) in [("T first", src.clone()), ("L first", swapped)] {
+    for (order, text) in [("T first", src), ("L first", swapped)] {
         let before = check_with(&text, eps);
         assert_eq!(count(&before, "overlapping"), 1, "{order}: {before}");
         let cut = run_ok("ugcopl", &["-e", eps], Some(text.as_bytes()));
@@ -478,18 +480,10 @@ fn faces_of_a_group_measure_a_neighbours_point_alike() {
 /// its plane, and both decide alike.
 #[test]
 fn a_turned_face_measures_a_neighbours_point_along_the_groups_normal() {
-    let src = std::fs::read_to_string(fixture(
-        "copl/globe-facet-at-12-degrees-on-a-ceiling-ring-at-1mm.ug",
-    ))
-    .unwrap();
+    let (src, swapped) =
+        both_face_orders("copl/globe-facet-at-12-degrees-on-a-ceiling-ring-at-1mm.ug");
     let eps = "0.0021000000000000003";
-    let (head, faces) = src.split_at(src.find("\nf ").unwrap() + 1);
-    let swapped = {
-        let mut lines: Vec<&str> = faces.lines().collect();
-        lines.reverse();
-        format!("{head}{}\n", lines.join("\n"))
-    };
-    for (order, text) in [("ring first", src.clone()), ("facet first", swapped)] {
+    for (order, text) in [("ring first", src), ("facet first", swapped)] {
         let before = check_with(&text, eps);
         assert_eq!(count(&before, "overlapping"), 1, "{order}: {before}");
         let cut = run_ok("ugcopl", &["-e", eps], Some(text.as_bytes()));
