@@ -750,19 +750,28 @@ type PairLists = (Vec<Pair>, Vec<Overlap>, Vec<Pair>);
 /// (`None` for a face without area).
 pub fn face_geoms(m: &Model) -> (Vec<FaceId>, Vec<Option<FaceGeom>>) {
     let faces: Vec<FaceId> = m.top_faces().collect();
-    let geoms = faces
-        .iter()
-        .map(|&f| {
-            FaceGeom::new(
-                m.faces[f.idx()]
-                    .contours
-                    .iter()
-                    .map(|c| c.iter().map(|&v| m.pos(v)).collect())
-                    .collect(),
-            )
-        })
-        .collect();
+    let geoms = faces.iter().map(|&f| face_geom(m, f, None)).collect();
     (faces, geoms)
+}
+
+/// Face `f`'s geometry for the pair tests, with vertex `moved.0` (where
+/// given) at `moved.1`: how the tools that move a vertex judge the move
+/// ([`meeting`] before and after). `None` for a face without area.
+pub fn face_geom(m: &Model, f: FaceId, moved: Option<(VertexId, DVec3)>) -> Option<FaceGeom> {
+    FaceGeom::new(
+        m.faces[f.idx()]
+            .contours
+            .iter()
+            .map(|c| {
+                c.iter()
+                    .map(|&u| match moved {
+                        Some((v, p)) if u == v => p,
+                        _ => m.pos(u),
+                    })
+                    .collect()
+            })
+            .collect(),
+    )
 }
 
 /// How two faces of a pair meet (see [`classify_pairs`]).

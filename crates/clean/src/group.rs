@@ -424,22 +424,8 @@ impl<'a> NearTip<'a> {
 
     /// Face `f` with the tip at vertex `to`'s place, or as it is.
     fn shape(&self, f: FaceId, to: Option<VertexId>) -> Option<geom::intersect::FaceGeom> {
-        let at = to.map(|t| self.mesh.pos(t));
-        geom::intersect::FaceGeom::new(
-            self.mesh
-                .face(f)
-                .contours
-                .iter()
-                .map(|c| {
-                    c.iter()
-                        .map(|&u| match at {
-                            Some(p) if u == self.v => p,
-                            _ => self.mesh.pos(u),
-                        })
-                        .collect()
-                })
-                .collect(),
-        )
+        let moved = to.map(|t| (self.v, self.mesh.pos(t)));
+        check::face_geom(self.mesh.model(), f, moved)
     }
 
     /// Whether moving the tip in each face of `each` to that face's vertex

@@ -1198,22 +1198,7 @@ fn orient_joins(m: &Model, joins: &mut [(VertexId, VertexId)], eps: f64) {
             .enumerate()
             .map(|(k, &(lo, hi))| (lo, hi, k as u32)),
     );
-    let shape = |f: FaceId, moved: Option<(VertexId, DVec3)>| -> Option<FaceGeom> {
-        FaceGeom::new(
-            m.faces[f.idx()]
-                .contours
-                .iter()
-                .map(|c| {
-                    c.iter()
-                        .map(|&u| match moved {
-                            Some((v, p)) if u == v => p,
-                            _ => m.pos(u),
-                        })
-                        .collect()
-                })
-                .collect(),
-        )
-    };
+    let shape = |f: FaceId, moved: Option<(VertexId, DVec3)>| check::face_geom(m, f, moved);
     let overlap: fn(check::PairKind) -> bool = |k| matches!(k, check::PairKind::Overlap(_));
     let kind = |a: &FaceGeom, b: &FaceGeom| check::meeting(a, b, eps, Some(overlap));
     // Whether moving `a` onto `b`'s place makes a pair worse.

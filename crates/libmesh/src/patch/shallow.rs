@@ -127,13 +127,7 @@ fn in_contact(m: &Model, eps: f64) -> Vec<bool> {
 }
 
 fn geom_of(out: &Model, k: usize) -> Option<FaceGeom> {
-    FaceGeom::new(
-        out.faces[k]
-            .contours
-            .iter()
-            .map(|c| c.iter().map(|&v| out.pos(v)).collect())
-            .collect(),
-    )
+    check::face_geom(out, ug::FaceId(k as u32), None)
 }
 
 /// Whether the pair is one the check reports (overlapping or coincident).
@@ -727,14 +721,7 @@ fn relocate(s: &mut State<'_>, p: usize, o: usize) -> bool {
             }
             let geoms: Vec<Option<FaceGeom>> = star
                 .iter()
-                .map(|&k| {
-                    let c = &s.out.faces[k].contours[0];
-                    FaceGeom::new(vec![
-                        c.iter()
-                            .map(|&u| if u == v { q } else { s.out.pos(u) })
-                            .collect(),
-                    ])
-                })
+                .map(|&k| check::face_geom(s.out, ug::FaceId(k as u32), Some((v, q))))
                 .collect();
             let after: usize = star
                 .iter()
