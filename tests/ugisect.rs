@@ -367,3 +367,55 @@ fn a_ceiling_on_a_wall_chord_is_cut_in_either_order() {
         assert_eq!(count(&r, "nonpatch"), 0, "{}", r["nonpatch"]);
     }
 }
+
+/// A pair that cutting within epsilon cannot separate is named on stderr,
+/// not passed on in silence: a bookcase's side crossing a stair step's side
+/// at 0.9° (fixtures/isect/bookcase-side-crossing-a-stair-side-at-0.9-degrees.ug,
+/// from a building rounded to centimetres, at its epsilon of 2.1 mm). The
+/// warning names the pair `ugcheck` then finds crossing, with its angle;
+/// a model that cutting resolves gets no warning.
+#[test]
+fn a_pair_left_crossing_is_named_in_a_warning() {
+    let src = std::fs::read_to_string(fixture(
+        "isect/bookcase-side-crossing-a-stair-side-at-0.9-degrees.ug",
+    ))
+    .unwrap();
+    let eps = ["-e", "0.0021"];
+    let out = ugkit::run("ugisect", &eps, Some(src.as_bytes()));
+    assert!(out.status.success());
+    let (text, err) = (
+        String::from_utf8(out.stdout).unwrap(),
+        String::from_utf8(out.stderr).unwrap(),
+    );
+    let left = check_eps(&text, &eps)["intersecting"]
+        .as_array()
+        .unwrap()
+        .clone();
+    assert_eq!(left.len(), 1, "{text}");
+    let (a, b) = (
+        left[0]["a"].as_str().unwrap(),
+        left[0]["b"].as_str().unwrap(),
+    );
+    assert!(
+        err.contains("warning: 1 pair of faces still crosses after 8 rounds of cutting")
+            && err.contains(&format!("{a} and {b} (0.9°)")),
+        "{err}"
+    );
+    // Quiet with -q; and no warning where the rounds end clean (the same
+    // faces at their own epsilon, 2.3e-6, are cut apart).
+    let quiet = ugkit::run("ugisect", &["-q", "-e", "0.0021"], Some(src.as_bytes()));
+    assert!(quiet.stderr.is_empty());
+    let own = ugkit::run("ugisect", &[], Some(src.as_bytes()));
+    assert!(
+        own.status.success() && own.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&own.stderr)
+    );
+    assert_eq!(
+        count(
+            &check(&String::from_utf8(own.stdout).unwrap()),
+            "intersecting"
+        ),
+        0
+    );
+}

@@ -37,6 +37,28 @@ fn main() -> std::process::ExitCode {
                 st.tessellated
             );
         }
+        if !st.left.is_empty() && !c.quiet {
+            let shown = if c.verbose > 0 { st.left.len() } else { 5 };
+            let names: Vec<String> = st
+                .left
+                .iter()
+                .take(shown)
+                .map(|(a, b, angle)| format!("{a} and {b} ({angle:.1}°)"))
+                .collect();
+            let more = if st.left.len() > shown {
+                format!(" and {} more (-v lists them)", st.left.len() - shown)
+            } else {
+                String::new()
+            };
+            let n = st.left.len();
+            eprintln!(
+                "warning: {n} {} of faces still {} after {} rounds of cutting: {}{more}; cutting within epsilon did not separate them (near the cut their pieces stay within epsilon of each other: faces crossing at a shallow angle); ugcheck lists them",
+                if n == 1 { "pair" } else { "pairs" },
+                if n == 1 { "crosses" } else { "cross" },
+                st.rounds,
+                names.join(", ")
+            );
+        }
         c.verbose(format!(
             "epsilon {eps:e}; {} intersecting pairs, {} cut segments; {} faces cut into {} pieces ({} cuts extended); {} new vertices; {} T-vertices inserted; {} round(s); {} faces bent off their plane by welding, folded into triangles",
             st.pairs, st.segments, st.faces_cut, st.pieces, st.extensions, st.new_vertices, st.tvertices, st.rounds, st.folded

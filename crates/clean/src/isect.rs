@@ -37,7 +37,7 @@ use crate::pieces::{Rebuild, face_geoms};
 /// A face's pieces: contours of points.
 type Pieces = Vec<Vec<Vec<Point>>>;
 
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Stats {
     pub pairs: usize,
     /// Cut segments found (one pair may give several, through holes).
@@ -55,6 +55,13 @@ pub struct Stats {
     /// Faces that the welding of new vertices (within epsilon) bent off
     /// their plane by more than epsilon, folded into triangles at the end.
     pub folded: usize,
+    /// The pairs that still cross after the last round (names, or `#k`
+    /// for the k-th top-level face, as `ugcheck` labels them), with the
+    /// angle between their planes in degrees: cutting within epsilon did
+    /// not separate them (faces crossing at a shallow angle, whose pieces
+    /// near the cut lie within epsilon of each other and meet again).
+    /// Found only where the rounds did not end clean.
+    pub left: Vec<(String, String, f64)>,
 }
 
 /// Most rounds of cutting: a cut can leave a piece that meets another face
@@ -77,8 +84,11 @@ pub fn isect(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
     let (mut out, mut stats) = isect_once(m, eps, None)?;
     stats.tessellated = pst.nonplanar;
     let mut rounds = 1;
+    // Whether a round found the output free of intersecting pairs.
+    let mut settled = stats.pairs == 0;
     while stats.pairs > 0 && rounds < MAX_ROUNDS {
         let (next, st) = isect_once(&out, eps, None)?;
+        settled = st.pairs == 0;
         if st.pairs == 0 || (st.faces_cut == 0 && st.new_vertices == 0) {
             break;
         }
@@ -94,7 +104,32 @@ pub fn isect(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
         out = next;
     }
     stats.rounds = rounds;
+    if !settled {
+        stats.left = crossing_pairs(&out, eps);
+    }
     Ok((out, stats))
+}
+
+/// The intersecting pairs of `m`, by the faces' labels, with the angle
+/// between their planes (degrees).
+fn crossing_pairs(m: &Model, eps: f64) -> Vec<(String, String, f64)> {
+    let (faces, geoms) = face_geoms(m);
+    let label = |k: usize| {
+        m.faces[faces[k].idx()]
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("#{}", k + 1))
+    };
+    check::intersecting_pairs_with(&geoms, eps, None)
+        .into_iter()
+        .map(|(i, j)| {
+            let angle = match (&geoms[i], &geoms[j]) {
+                (Some(a), Some(b)) => a.plane.n.dot(b.plane.n).abs().min(1.0).acos().to_degrees(),
+                _ => f64::NAN,
+            };
+            (label(i), label(j), angle)
+        })
+        .collect()
 }
 
 /// One round: every intersecting pair found and cut; with `among` (by
