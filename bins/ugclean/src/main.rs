@@ -84,8 +84,9 @@ fn main() -> std::process::ExitCode {
                 }
             }
             eprintln!(
-                "{} faces left more than epsilon off their plane, folded into triangles; {} tents' tips joined to a neighbour; {} coincident pairs they made, {} faces removed, area {}",
+                "{} faces left more than epsilon off their plane, folded into triangles; {} points joined to a corner just beyond epsilon; {} tents' tips joined to a neighbour; {} coincident pairs they made, {} faces removed, area {}",
                 tents.folded,
+                tents.corners,
                 tents.joined,
                 tents.coincident.pairs,
                 tents.coincident.removed.len(),
@@ -93,6 +94,15 @@ fn main() -> std::process::ExitCode {
             );
             for (r, k, why) in &tents.coincident.removed {
                 eprintln!("  removed {r} (kept {k}): {why}");
+            }
+            if !tents.dropped.is_empty() {
+                eprintln!(
+                    "{} faces the joins left without area, dropped",
+                    tents.dropped.len()
+                );
+                for d in &tents.dropped {
+                    eprintln!("  dropped {}: {}", d.face, d.reason);
+                }
             }
         }
         Ok(out)

@@ -244,7 +244,9 @@ pub fn collapse_tents(model: Model, eps: f64, bent: &[String]) -> (Model, Tents)
         .into_iter()
         .flatten()
         .collect();
-    let (mut out, mut joined, mut moved) = collapse_tents_once(model, eps);
+    let (mut corners, mut dropped) = (0, Vec::new());
+    let (mut out, mut joined, mut moved) =
+        collapse_tents_once(model, eps, &mut corners, &mut dropped);
     let mut coincident = crate::coincident::Stats::default();
     for _ in 0..2 {
         if !moved {
@@ -265,7 +267,7 @@ pub fn collapse_tents(model: Model, eps: f64, bent: &[String]) -> (Model, Tents)
             .into_iter()
             .flatten()
             .collect();
-        let (o, j, m) = collapse_tents_once(next, eps);
+        let (o, j, m) = collapse_tents_once(next, eps, &mut corners, &mut dropped);
         (out, moved) = (o, m);
         joined += j;
     }
@@ -275,6 +277,8 @@ pub fn collapse_tents(model: Model, eps: f64, bent: &[String]) -> (Model, Tents)
             joined,
             coincident,
             folded,
+            corners,
+            dropped,
         },
     )
 }
@@ -289,11 +293,30 @@ pub struct Tents {
     /// Faces more than epsilon off their plane, folded into triangles
     /// first.
     pub folded: usize,
+    /// Points just beyond epsilon of a corner and within epsilon of an
+    /// edge leaving it, joined to the corner first.
+    pub corners: usize,
+    /// Faces the joins left without area (all their vertices on a line, or
+    /// fewer than three), dropped: their name (`#k` for the k-th face of
+    /// the step's input, from 1) and why.
+    pub dropped: Vec<Dropped>,
 }
 
 /// One round of [`collapse_tents`]: the model, the tips joined, and
-/// whether anything moved.
-fn collapse_tents_once(model: Model, eps: f64) -> (Model, usize, bool) {
+/// whether anything moved; the points it joined to a corner are added to
+/// `corners`, the faces it dropped to `dropped`.
+fn collapse_tents_once(
+    model: Model,
+    eps: f64,
+    corners: &mut usize,
+    dropped: &mut Vec<Dropped>,
+) -> (Model, usize, bool) {
+    let label = |m: &Model, f: FaceId| {
+        m.faces[f.idx()]
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("#{}", f.0 + 1))
+    };
     let stated = stated_names(&model);
     let mut mesh = Mesh::from_model(model);
     // A point just beyond epsilon of a corner and within epsilon of an
@@ -306,7 +329,18 @@ fn collapse_tents_once(model: Model, eps: f64) -> (Model, usize, bool) {
     let mut changed = false;
     for _ in 0..TENT_ROUNDS {
         let near = winged::weld::near_corner_joins(mesh.model(), mesh.model(), eps);
-        if near.is_empty() || winged::weld::join_vertices(&mut mesh, &near, eps).0 == 0 {
+        if near.is_empty() {
+            break;
+        }
+        let (n, gone) = winged::weld::join_vertices(&mut mesh, &near, eps);
+        *corners += n;
+        for (f, reason) in gone {
+            dropped.push(Dropped {
+                face: label(mesh.model(), f),
+                reason,
+            });
+        }
+        if n == 0 {
             break;
         }
         changed = true;
@@ -322,7 +356,13 @@ fn collapse_tents_once(model: Model, eps: f64) -> (Model, usize, bool) {
         let keeps = |mesh: &Mesh, v: VertexId, to: VertexId| join_keeps_pairs(mesh, v, to, eps);
         let split =
             |mesh: &Mesh, v: VertexId, ends: [VertexId; 2]| split_keeps_pairs(mesh, v, ends, eps);
-        let (j, _) = winged::weld::collapse_tents_split(&mut mesh, eps, &keeps, &split);
+        let (j, gone) = winged::weld::collapse_tents_split(&mut mesh, eps, &keeps, &split);
+        for (f, reason) in gone {
+            dropped.push(Dropped {
+                face: label(mesh.model(), f),
+                reason,
+            });
+        }
         joined += j;
         if j == 0 {
             break;
@@ -334,7 +374,12 @@ fn collapse_tents_once(model: Model, eps: f64) -> (Model, usize, bool) {
     // A tip joined to a vertex that another contour through it already
     // passes makes that contour visit it twice: the repair splits it there.
     if joined > 0 || changed {
-        out = settle_stated(out, eps);
+        let stated = stated_names(&out);
+        if let Ok((mut settled, st)) = settle(out.clone(), eps) {
+            keep_stated(&mut settled, &stated);
+            dropped.extend(st.dropped);
+            out = settled;
+        }
     }
     (out, joined, joined > 0 || changed)
 }
