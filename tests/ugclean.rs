@@ -1253,3 +1253,35 @@ fn a_face_the_joins_leave_without_area_is_named() {
         assert_eq!(faces(&text), ["s0w1r1.3.t1.i7.c3"]);
     }
 }
+
+/// The same for a face the coincident step's shared records leave without
+/// area: a wall end's sliver 4 mm wide between two walls' sides 4 mm apart
+/// (fixtures/clean/a-sliver-between-coincident-wall-bottoms-at-1mm.ug).
+#[test]
+fn a_sliver_the_shared_records_flatten_is_named() {
+    let src = std::fs::read_to_string(fixture(
+        "clean/a-sliver-between-coincident-wall-bottoms-at-1mm.ug",
+    ))
+    .unwrap();
+    let out = ugkit::run(
+        "ugclean",
+        &["-v", "-e", "0.0021000000000000003"],
+        Some(src.as_bytes()),
+    );
+    assert!(out.status.success());
+    let (text, err) = (
+        String::from_utf8(out.stdout).unwrap(),
+        String::from_utf8(out.stderr).unwrap(),
+    );
+    assert!(
+        err.contains("1 faces the shared records left without area, dropped")
+            && err.contains("  dropped s0w25r0.3.i1: fallen to a segment"),
+        "{err}"
+    );
+    let named = err
+        .lines()
+        .filter(|l| l.starts_with("  removed ") || l.starts_with("  dropped "))
+        .count();
+    assert_eq!(faces(&text).len() + named, 3, "{err}\n{text}");
+    assert_eq!(faces(&text), ["s0w25r0.2.i2"]);
+}

@@ -70,6 +70,15 @@ fn main() -> std::process::ExitCode {
             for (r, k, why) in &st.removed {
                 eprintln!("  removed {r} (kept {k}): {why}");
             }
+            if !st.dropped.is_empty() {
+                eprintln!(
+                    "{} faces the shared records left without area, dropped",
+                    st.dropped.len()
+                );
+                for d in &st.dropped {
+                    eprintln!("  dropped {}: {}", d.face, d.reason);
+                }
+            }
             if !args.keep_enclosed {
                 eprintln!(
                     "{} enclosed faces removed, area {}; {} kept where removing them would leave an edge walked twice the same way",
@@ -95,12 +104,17 @@ fn main() -> std::process::ExitCode {
             for (r, k, why) in &tents.coincident.removed {
                 eprintln!("  removed {r} (kept {k}): {why}");
             }
-            if !tents.dropped.is_empty() {
+            let dropped: Vec<_> = tents
+                .dropped
+                .iter()
+                .chain(&tents.coincident.dropped)
+                .collect();
+            if !dropped.is_empty() {
                 eprintln!(
                     "{} faces the joins left without area, dropped",
-                    tents.dropped.len()
+                    dropped.len()
                 );
-                for d in &tents.dropped {
+                for d in dropped {
                     eprintln!("  dropped {}: {}", d.face, d.reason);
                 }
             }

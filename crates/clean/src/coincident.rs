@@ -67,6 +67,11 @@ pub struct Stats {
     /// Faces (by name) the shared records left more than epsilon off their
     /// plane: [`crate::group::collapse_tents`] folds those left.
     pub bent: Vec<String>,
+    /// Faces the shared records left without area (a sliver narrower than
+    /// the tolerance fallen to a segment, a contour then touching itself
+    /// repaired away), dropped: their name (`#k` for the k-th face, from 1)
+    /// and why.
+    pub dropped: Vec<crate::group::Dropped>,
 }
 
 fn label(m: &Model, k: usize, f: FaceId) -> String {
@@ -187,6 +192,7 @@ fn clean_among(m: &Model, eps: f64, among: Option<&[bool]>) -> (Model, Stats) {
         stats.area_removed += st.area_removed;
         stats.snapped += st.snapped;
         stats.reshaped += st.reshaped;
+        stats.dropped.extend(st.dropped);
     }
     if stats.snapped > 0 {
         stats.joined = join_contours_along_shared_edges(&mut out);
@@ -373,6 +379,7 @@ fn clean_once(m: &Model, eps: f64, among: Option<&[bool]>) -> (Model, Stats) {
             }
         }
     }
+    let paired = removed.clone();
     let to = snap_onto_removed(
         &mut out,
         &kept_for,
@@ -380,6 +387,14 @@ fn clean_once(m: &Model, eps: f64, among: Option<&[bool]>) -> (Model, Stats) {
         eps,
         geom::intersect::CLEAN_COPLANAR_EPSILONS * eps,
     );
+    for (k, f) in faces.iter().enumerate() {
+        if removed[f.idx()] && !paired[f.idx()] {
+            stats.dropped.push(crate::group::Dropped {
+                face: label(m, k, *f),
+                reason: "fallen to a segment when the pairs' records were shared".into(),
+            });
+        }
+    }
     stats.snapped = to.len();
     stats.reshaped += take_twin_shapes(&mut out, m, &kept_for, &removed, &to, eps);
     stats.reshaped += close_twin_gaps(&mut out, m, &kept_for, &removed, &to, eps);
@@ -396,7 +411,12 @@ fn clean_once(m: &Model, eps: f64, among: Option<&[bool]>) -> (Model, Stats) {
         // an edge of its own face that it is not an end of (a triangle
         // export's thin piece, seed 22 of the property on 3 × 2 rooms):
         // the repair makes such faces sound again.
-        out = crate::group::settle_stated(out, eps);
+        let stated = crate::group::stated_names(&out);
+        if let Ok((mut settled, st)) = crate::group::settle(out.clone(), eps) {
+            crate::group::keep_stated(&mut settled, &stated);
+            stats.dropped.extend(st.dropped);
+            out = settled;
+        }
     }
     (out, stats)
 }

@@ -263,6 +263,7 @@ pub fn collapse_tents(model: Model, eps: f64, bent: &[String]) -> (Model, Tents)
         coincident.pairs += st.pairs;
         coincident.removed.extend(st.removed);
         coincident.area_removed += st.area_removed;
+        coincident.dropped.extend(st.dropped);
         before = crate::copl::face_keys(&next)
             .into_iter()
             .flatten()
@@ -510,7 +511,7 @@ impl<'a> NearTip<'a> {
 const TENT_ROUNDS: usize = 4;
 
 /// The names of the vertices that have a statement.
-fn stated_names(m: &Model) -> rustc_hash::FxHashSet<String> {
+pub(crate) fn stated_names(m: &Model) -> rustc_hash::FxHashSet<String> {
     m.top_vertices()
         .map(|v| m.vertices[v.idx()].name.clone())
         .collect()
@@ -520,7 +521,7 @@ fn stated_names(m: &Model) -> rustc_hash::FxHashSet<String> {
 /// gives a statement to every vertex of a model's arena, those whose
 /// statements were removed before (vertices only removed faces used)
 /// included; joining, splitting and repairing make no new vertex.
-fn keep_stated(m: &mut Model, stated: &rustc_hash::FxHashSet<String>) {
+pub(crate) fn keep_stated(m: &mut Model, stated: &rustc_hash::FxHashSet<String>) {
     let keep: Vec<bool> = m
         .vertices
         .iter()
