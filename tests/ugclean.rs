@@ -1215,6 +1215,24 @@ fn emitters_buried_in_solids_are_enclosed() {
     }
 }
 
+/// ugclean with `args` (`-v` among them) on `src`: its output and stderr,
+/// and that every face in (`faces_in`) is a face out or a named removal
+/// (`removed` or `dropped` lines).
+fn clean_accounted(src: &str, args: &[&str], faces_in: usize) -> (String, String) {
+    let out = ugkit::run("ugclean", args, Some(src.as_bytes()));
+    assert!(out.status.success());
+    let (text, err) = (
+        String::from_utf8(out.stdout).unwrap(),
+        String::from_utf8(out.stderr).unwrap(),
+    );
+    let named = err
+        .lines()
+        .filter(|l| l.starts_with("  removed ") || l.starts_with("  dropped "))
+        .count();
+    assert_eq!(faces(&text).len() + named, faces_in, "{err}\n{text}");
+    (text, err)
+}
+
 /// A face that ugclean's last step leaves without area is dropped and
 /// named by `-v`, not lost unreported: a facade sliver whose corner lies
 /// just beyond epsilon of another corner and within epsilon of the edge
@@ -1231,12 +1249,7 @@ fn a_face_the_joins_leave_without_area_is_named() {
         if keep {
             args.push("--keep-enclosed");
         }
-        let out = ugkit::run("ugclean", &args, Some(src.as_bytes()));
-        assert!(out.status.success());
-        let (text, err) = (
-            String::from_utf8(out.stdout).unwrap(),
-            String::from_utf8(out.stderr).unwrap(),
-        );
+        let (text, err) = clean_accounted(&src, &args, 2);
         assert!(
             err.contains("1 points joined to a corner just beyond epsilon")
                 && err.contains("1 faces the joins left without area, dropped")
@@ -1245,11 +1258,6 @@ fn a_face_the_joins_leave_without_area_is_named() {
         );
         // (Without `--keep-enclosed`, neither face is found enclosed.)
         assert!(keep || err.contains("\n0 enclosed faces removed"), "{err}");
-        let named = err
-            .lines()
-            .filter(|l| l.starts_with("  removed ") || l.starts_with("  dropped "))
-            .count();
-        assert_eq!(faces(&text).len() + named, 2, "{err}\n{text}");
         assert_eq!(faces(&text), ["s0w1r1.3.t1.i7.c3"]);
     }
 }
@@ -1263,25 +1271,11 @@ fn a_sliver_the_shared_records_flatten_is_named() {
         "clean/a-sliver-between-coincident-wall-bottoms-at-1mm.ug",
     ))
     .unwrap();
-    let out = ugkit::run(
-        "ugclean",
-        &["-v", "-e", "0.0021000000000000003"],
-        Some(src.as_bytes()),
-    );
-    assert!(out.status.success());
-    let (text, err) = (
-        String::from_utf8(out.stdout).unwrap(),
-        String::from_utf8(out.stderr).unwrap(),
-    );
+    let (text, err) = clean_accounted(&src, &["-v", "-e", "0.0021000000000000003"], 3);
     assert!(
         err.contains("1 faces the shared records left without area, dropped")
             && err.contains("  dropped s0w25r0.3.i1: fallen to a segment"),
         "{err}"
     );
-    let named = err
-        .lines()
-        .filter(|l| l.starts_with("  removed ") || l.starts_with("  dropped "))
-        .count();
-    assert_eq!(faces(&text).len() + named, 3, "{err}\n{text}");
     assert_eq!(faces(&text), ["s0w25r0.2.i2"]);
 }
