@@ -70,15 +70,7 @@ fn main() -> std::process::ExitCode {
             for (r, k, why) in &st.removed {
                 eprintln!("  removed {r} (kept {k}): {why}");
             }
-            if !st.dropped.is_empty() {
-                eprintln!(
-                    "{} faces the shared records left without area, dropped",
-                    st.dropped.len()
-                );
-                for d in &st.dropped {
-                    eprintln!("  dropped {}: {}", d.face, d.reason);
-                }
-            }
+            print_dropped("the shared records", st.dropped.iter());
             if !args.keep_enclosed {
                 eprintln!(
                     "{} enclosed faces removed, area {}; {} kept where removing them would leave an edge walked twice the same way",
@@ -104,21 +96,22 @@ fn main() -> std::process::ExitCode {
             for (r, k, why) in &tents.coincident.removed {
                 eprintln!("  removed {r} (kept {k}): {why}");
             }
-            let dropped: Vec<_> = tents
-                .dropped
-                .iter()
-                .chain(&tents.coincident.dropped)
-                .collect();
-            if !dropped.is_empty() {
-                eprintln!(
-                    "{} faces the joins left without area, dropped",
-                    dropped.len()
-                );
-                for d in dropped {
-                    eprintln!("  dropped {}: {}", d.face, d.reason);
-                }
-            }
+            print_dropped(
+                "the joins",
+                tents.dropped.iter().chain(&tents.coincident.dropped),
+            );
         }
         Ok(out)
     })
+}
+
+/// The `-v` lines for faces `what` left without area: a count, then each.
+fn print_dropped<'a>(what: &str, dropped: impl Iterator<Item = &'a clean::group::Dropped>) {
+    let dropped: Vec<_> = dropped.collect();
+    if !dropped.is_empty() {
+        eprintln!("{} faces {what} left without area, dropped", dropped.len());
+        for d in dropped {
+            eprintln!("  dropped {}: {}", d.face, d.reason);
+        }
+    }
 }

@@ -411,12 +411,9 @@ fn clean_once(m: &Model, eps: f64, among: Option<&[bool]>) -> (Model, Stats) {
         // an edge of its own face that it is not an end of (a triangle
         // export's thin piece, seed 22 of the property on 3 × 2 rooms):
         // the repair makes such faces sound again.
-        let stated = crate::group::stated_names(&out);
-        if let Ok((mut settled, st)) = crate::group::settle(out.clone(), eps) {
-            crate::group::keep_stated(&mut settled, &stated);
-            stats.dropped.extend(st.dropped);
-            out = settled;
-        }
+        let gone;
+        (out, gone) = crate::group::settle_stated(out, eps);
+        stats.dropped.extend(gone);
     }
     (out, stats)
 }

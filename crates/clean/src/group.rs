@@ -312,12 +312,8 @@ fn collapse_tents_once(
     corners: &mut usize,
     dropped: &mut Vec<Dropped>,
 ) -> (Model, usize, bool) {
-    let label = |m: &Model, f: FaceId| {
-        m.faces[f.idx()]
-            .name
-            .clone()
-            .unwrap_or_else(|| format!("#{}", f.0 + 1))
-    };
+    let labels = face_labels(&model);
+    let label = |f: FaceId| labels.get(f.idx()).cloned().flatten().unwrap_or_default();
     let stated = stated_names(&model);
     let mut mesh = Mesh::from_model(model);
     // A point just beyond epsilon of a corner and within epsilon of an
@@ -337,7 +333,7 @@ fn collapse_tents_once(
         *corners += n;
         for (f, reason) in gone {
             dropped.push(Dropped {
-                face: label(mesh.model(), f),
+                face: label(f),
                 reason,
             });
         }
@@ -360,7 +356,7 @@ fn collapse_tents_once(
         let (j, gone) = winged::weld::collapse_tents_split(&mut mesh, eps, &keeps, &split);
         for (f, reason) in gone {
             dropped.push(Dropped {
-                face: label(mesh.model(), f),
+                face: label(f),
                 reason,
             });
         }
@@ -375,12 +371,9 @@ fn collapse_tents_once(
     // A tip joined to a vertex that another contour through it already
     // passes makes that contour visit it twice: the repair splits it there.
     if joined > 0 || changed {
-        let stated = stated_names(&out);
-        if let Ok((mut settled, st)) = settle(out.clone(), eps) {
-            keep_stated(&mut settled, &stated);
-            dropped.extend(st.dropped);
-            out = settled;
-        }
+        let gone;
+        (out, gone) = settle_stated(out, eps);
+        dropped.extend(gone);
     }
     (out, joined, joined > 0 || changed)
 }
@@ -511,7 +504,7 @@ impl<'a> NearTip<'a> {
 const TENT_ROUNDS: usize = 4;
 
 /// The names of the vertices that have a statement.
-pub(crate) fn stated_names(m: &Model) -> rustc_hash::FxHashSet<String> {
+fn stated_names(m: &Model) -> rustc_hash::FxHashSet<String> {
     m.top_vertices()
         .map(|v| m.vertices[v.idx()].name.clone())
         .collect()
@@ -521,7 +514,7 @@ pub(crate) fn stated_names(m: &Model) -> rustc_hash::FxHashSet<String> {
 /// gives a statement to every vertex of a model's arena, those whose
 /// statements were removed before (vertices only removed faces used)
 /// included; joining, splitting and repairing make no new vertex.
-pub(crate) fn keep_stated(m: &mut Model, stated: &rustc_hash::FxHashSet<String>) {
+fn keep_stated(m: &mut Model, stated: &rustc_hash::FxHashSet<String>) {
     let keep: Vec<bool> = m
         .vertices
         .iter()
@@ -533,14 +526,15 @@ pub(crate) fn keep_stated(m: &mut Model, stated: &rustc_hash::FxHashSet<String>)
 
 /// [`settle`] on a model whose arena may hold vertices without a
 /// statement, which stay without one; on an error, the model as it was.
-pub fn settle_stated(model: Model, eps: f64) -> Model {
+/// Also the faces it dropped (no area left), with why.
+pub fn settle_stated(model: Model, eps: f64) -> (Model, Vec<Dropped>) {
     let stated = stated_names(&model);
     match settle(model.clone(), eps) {
-        Ok((mut out, _)) => {
+        Ok((mut out, st)) => {
             keep_stated(&mut out, &stated);
-            out
+            (out, st.dropped)
         }
-        Err(_) => model,
+        Err(_) => (model, Vec::new()),
     }
 }
 
@@ -608,7 +602,7 @@ pub fn warnings(st: &Stats, all: bool) -> Vec<String> {
 }
 
 /// Per face id: its name, or `#k` for the k-th top-level face (from 1), as `ugcheck` names it.
-fn face_labels(m: &Model) -> Vec<Option<String>> {
+pub(crate) fn face_labels(m: &Model) -> Vec<Option<String>> {
     let mut labels = vec![None; m.faces.len()];
     for (k, f) in m.top_faces().enumerate() {
         if let Some(l) = labels.get_mut(f.idx())

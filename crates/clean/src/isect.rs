@@ -114,12 +114,8 @@ pub fn isect(m: &Model, eps: f64) -> Result<(Model, Stats), ug::Diagnostic> {
 /// between their planes (degrees).
 fn crossing_pairs(m: &Model, eps: f64) -> Vec<(String, String, f64)> {
     let (faces, geoms) = face_geoms(m);
-    let label = |k: usize| {
-        m.faces[faces[k].idx()]
-            .name
-            .clone()
-            .unwrap_or_else(|| format!("#{}", k + 1))
-    };
+    let labels = crate::group::face_labels(m);
+    let label = |k: usize| labels[faces[k].idx()].clone().unwrap_or_default();
     check::intersecting_pairs_with(&geoms, eps, None)
         .into_iter()
         .map(|(i, j)| {
