@@ -1,7 +1,7 @@
 //! ugclean end to end: one face of every coincident pair goes, the right one,
 //! and exactly the hidden area is removed.
 
-use ugkit::{assert_one_degenerate, fixture, run_ok};
+use ugkit::{assert_one_degenerate, fixture, run, run_ok};
 
 fn check(text: &str) -> serde_json::Value {
     serde_json::from_str(&run_ok("ugcheck", &["--json"], Some(text.as_bytes()))).unwrap()
@@ -1278,4 +1278,78 @@ fn a_sliver_the_shared_records_flatten_is_named() {
         "{err}"
     );
     assert_eq!(faces(&text), ["s0w25r0.2.i2"]);
+}
+
+/// The contour of face `name` in `text` as vertex names, outer contour
+/// first.
+fn contour(text: &str, name: &str) -> Vec<String> {
+    let m = ug::parse(text.as_bytes(), "o").unwrap().model;
+    let f = m
+        .top_faces()
+        .find(|&f| m.face(f).name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no face {name}:\n{text}"));
+    m.face(f).contours[0]
+        .iter()
+        .map(|&v| m.vertex(v).name.clone())
+        .collect()
+}
+
+/// Two faces walking their shared edge the same way, as parts ugflip
+/// oriented apart do once ugisect's cuts join them: a wall on a floor's
+/// edge facing away from it (fixtures/clean/wall-walking-the-floors-edge-the-same-way.ug),
+/// and a pier's side strip a centimetre wide against a sill's side from
+/// property seed 500322 rounded to centimetres
+/// (fixtures/clean/pier-strip-and-sill-side-walking-an-edge-the-same-way-at-1cm.ug;
+/// in the chain, six such edges stayed after ugclean). ugclean's last step
+/// turns the face of the lesser area, names it with `-vv`, leaves the other
+/// as it was, and turns nothing on its own output.
+#[test]
+fn faces_walking_a_shared_edge_the_same_way_turn_to_agree() {
+    for (path, eps, turned, kept) in [
+        (
+            "clean/wall-walking-the-floors-edge-the-same-way.ug",
+            "1e-6",
+            "wall",
+            "floor",
+        ),
+        (
+            "clean/pier-strip-and-sill-side-walking-an-edge-the-same-way-at-1cm.ug",
+            "7.743391e-6",
+            "s0w0p0.4.t2.i6.c1",
+            "s0w0s.3.t2.i2",
+        ),
+    ] {
+        let src = std::fs::read_to_string(fixture(path)).unwrap();
+        let report = |text: &str| -> serde_json::Value {
+            serde_json::from_str(&run_ok(
+                "ugcheck",
+                &["--json", "-e", eps],
+                Some(text.as_bytes()),
+            ))
+            .unwrap()
+        };
+        assert_eq!(report(&src)["inconsistent"].as_array().unwrap().len(), 1);
+        let res = run("ugclean", &["-vv", "-e", eps], Some(src.as_bytes()));
+        assert!(res.status.success(), "{path}");
+        let out = String::from_utf8(res.stdout).unwrap();
+        let err = String::from_utf8(res.stderr).unwrap();
+        assert_none(&report(&out), DEFECTS, &out);
+        assert!(
+            err.contains("1 faces turned to agree")
+                && err.contains(&format!("  turned {turned}\n")),
+            "{path}: {err}"
+        );
+        let (mut before, after) = (contour(&src, turned), contour(&out, turned));
+        before[1..].reverse();
+        assert_eq!(after, before, "{path}: {turned} is turned");
+        assert_eq!(contour(&out, kept), contour(&src, kept), "{path}");
+        let again = run("ugclean", &["-vv", "-e", eps], Some(out.as_bytes()));
+        assert_eq!(String::from_utf8(again.stdout).unwrap(), out, "{path}");
+        assert!(
+            String::from_utf8(again.stderr)
+                .unwrap()
+                .contains("0 faces turned to agree"),
+            "{path}"
+        );
+    }
 }

@@ -28,6 +28,10 @@ Examples:
 /// sliver, and ugcheck counts it as degenerate) joins its nearer neighbour
 /// (or the other, or each face through it takes the neighbour on its own
 /// side, where that keeps faces from crossing or overlapping).
+///
+/// Finally, where two faces walk a shared edge the same way (the cuts joined
+/// parts ugflip oriented apart), the faces of the lesser area in each part
+/// joined by such edges turn to agree with the rest.
 /// Instances are flattened first.
 #[derive(Parser, Debug)]
 #[command(version, after_help = EXAMPLES)]
@@ -50,13 +54,14 @@ fn main() -> std::process::ExitCode {
     let c = &args.common;
     cli::filter(c, args.epsilon, |model, eps| {
         let model = clean::group::settle_warned(model, eps, c.quiet, c.verbose > 0)?;
-        let (out, st) = clean::coincident::clean(&model, eps);
-        let (out, enc) = if args.keep_enclosed {
-            (out, clean::enclosed::Stats::default())
-        } else {
-            clean::enclosed::remove(&out, eps)
-        };
-        let (out, tents) = clean::group::collapse_tents(out, eps, &st.bent);
+        let (out, cl) = clean::clean(&model, eps, args.keep_enclosed);
+        let clean::Cleaned {
+            coincident: st,
+            enclosed,
+            tents,
+            turned,
+            turned_coincident,
+        } = cl;
         if c.verbose > 0 {
             eprintln!(
                 "epsilon {eps:e}; {} coincident pairs; removed {} faces, area {}; {} kept faces took a removed twin's contours; {} vertex records of kept faces replaced by the removed twins'; {} edges that two contours of a face then walked both ways joined",
@@ -71,7 +76,7 @@ fn main() -> std::process::ExitCode {
                 eprintln!("  removed {r} (kept {k}): {why}");
             }
             print_dropped("the shared records", st.dropped.iter());
-            if !args.keep_enclosed {
+            if let Some(enc) = enclosed {
                 eprintln!(
                     "{} enclosed faces removed, area {}; {} kept where removing them would leave an edge walked twice the same way",
                     enc.removed.len(),
@@ -100,6 +105,27 @@ fn main() -> std::process::ExitCode {
                 "the joins",
                 tents.dropped.iter().chain(&tents.coincident.dropped),
             );
+            eprintln!(
+                "{} faces turned to agree with their neighbours across the edges the cuts joined",
+                turned.len()
+            );
+            if c.verbose > 1 {
+                for t in &turned {
+                    eprintln!("  turned {t}");
+                }
+            }
+            if turned_coincident.pairs > 0 {
+                eprintln!(
+                    "{} coincident pairs the turns made, {} faces removed, area {}",
+                    turned_coincident.pairs,
+                    turned_coincident.removed.len(),
+                    turned_coincident.area_removed
+                );
+                for (r, k, why) in &turned_coincident.removed {
+                    eprintln!("  removed {r} (kept {k}): {why}");
+                }
+                print_dropped("the turns' pairs", turned_coincident.dropped.iter());
+            }
         }
         Ok(out)
     })

@@ -12,6 +12,9 @@
 //! | [`copl`] | ugcopl | [`copl::copl`] | cut coplanar overlapping faces (§2.5) |
 //! | [`coincident`] | ugclean | [`coincident::clean`] | drop one face of each coincident pair (§2.6) |
 //! | [`enclosed`] | ugclean | [`enclosed::remove`] | drop the faces no light can reach (inside solids) |
+//! | [`group`], [`orient`] | ugclean | [`group::collapse_tents`], [`orient::agree`] | join tents' tips, make orientation consistent across the edges the cuts joined |
+//!
+//! [`clean()`] runs ugclean's steps in its order.
 //!
 //! Every step takes the distance tolerance `eps` (model units) explicitly;
 //! pair tests come from the `check` crate, so a step removes exactly what
@@ -25,6 +28,73 @@ pub mod isect;
 pub mod orient;
 pub mod pieces;
 pub mod planar;
+
+use ug::Model;
+
+/// What [`clean()`]'s steps did.
+pub struct Cleaned {
+    pub coincident: coincident::Stats,
+    /// `None` when the enclosed faces were kept.
+    pub enclosed: Option<enclosed::Stats>,
+    pub tents: group::Tents,
+    /// Labels of the faces [`orient::agree`] turned.
+    pub turned: Vec<String>,
+    /// The coincident pairs the turns made (a face turned over onto the
+    /// face back to back with it: a table top thinner than epsilon), and
+    /// the faces removed of them.
+    pub turned_coincident: coincident::Stats,
+}
+
+/// ugclean's steps after it settles its input: one face of every coincident
+/// pair goes, then the enclosed faces (unless `keep_enclosed`), then tents'
+/// tips join a neighbour, and last the faces walking a shared edge the same
+/// way as their neighbours turn to agree. Where a turned face is then
+/// coincident with another (it lay back to back with it), the coincident
+/// step runs again on the turned faces, and the turns once more after it.
+pub fn clean(model: &Model, eps: f64, keep_enclosed: bool) -> (Model, Cleaned) {
+    let (out, coincident) = coincident::clean(model, eps);
+    let (out, enclosed) = if keep_enclosed {
+        (out, None)
+    } else {
+        let (out, st) = enclosed::remove(&out, eps);
+        (out, Some(st))
+    };
+    let (out, tents) = group::collapse_tents(out, eps, &coincident.bent);
+    let (mut out, ids) = orient::agree(out);
+    let labels = group::face_labels(&out);
+    let mut turned: Vec<String> = ids
+        .iter()
+        .map(|f| labels[f.idx()].clone().unwrap_or_default())
+        .collect();
+    let mut turned_coincident = coincident::Stats::default();
+    if !ids.is_empty() {
+        let mut among = vec![false; out.faces.len()];
+        for f in &ids {
+            among[f.idx()] = true;
+        }
+        let (next, st) = coincident::clean_near(&out, eps, &among);
+        if !st.removed.is_empty() {
+            let (next, more) = orient::agree(next);
+            let labels = group::face_labels(&next);
+            turned.extend(
+                more.iter()
+                    .map(|f| labels[f.idx()].clone().unwrap_or_default()),
+            );
+            out = next;
+            turned_coincident = st;
+        }
+    }
+    (
+        out,
+        Cleaned {
+            coincident,
+            enclosed,
+            tents,
+            turned,
+            turned_coincident,
+        },
+    )
+}
 
 /// The root of `x` in a union-find forest (`parent[r] == r` at a root),
 /// halving the path on the way.

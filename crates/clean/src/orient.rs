@@ -245,6 +245,204 @@ fn hemisphere(k: usize) -> Vec<DVec3> {
         .collect()
 }
 
+/// Faces joined by manifold edges (two uses by two faces), each with the
+/// flip that makes it agree with its component's reference orientation.
+struct Components {
+    /// Component of each face slot (`usize::MAX` for none).
+    comp: Vec<usize>,
+    /// Whether the face must turn to agree.
+    rel: Vec<bool>,
+    /// Each component's faces, from its first.
+    comps: Vec<Vec<FaceId>>,
+    /// The first face of each component that cannot be oriented
+    /// consistently (Möbius-like).
+    conflicted: Vec<FaceId>,
+}
+
+/// Finds the components of `faces` by a breadth-first walk from each
+/// component's first face; the reference orientation is that of the faces
+/// with the most `weight` (ties keep the first face's), so the least weight
+/// is turned.
+fn components(mesh: &Mesh, faces: &[FaceId], weight: impl Fn(FaceId) -> f64) -> Components {
+    let nf = mesh.model().faces.len();
+    let mut comp = vec![usize::MAX; nf];
+    let mut rel = vec![false; nf];
+    let mut comps: Vec<Vec<FaceId>> = Vec::new();
+    let mut conflicted = Vec::new();
+    for &start in faces {
+        if comp[start.idx()] != usize::MAX {
+            continue;
+        }
+        let c = comps.len();
+        let mut members = vec![start];
+        comp[start.idx()] = c;
+        let mut conflict = false;
+        let mut k = 0;
+        while k < members.len() {
+            let f = members[k];
+            k += 1;
+            for e in mesh.face_edges(f) {
+                let ed = mesh.edge(e);
+                if ed.uses.len() != 2 || ed.uses[0].face == ed.uses[1].face {
+                    continue;
+                }
+                let (mine, other) = if ed.uses[0].face == f {
+                    (ed.uses[0], ed.uses[1])
+                } else {
+                    (ed.uses[1], ed.uses[0])
+                };
+                let g = other.face;
+                // Consistent neighbours walk the shared edge in opposite directions.
+                let want = rel[f.idx()] ^ (mine.forward == other.forward);
+                if comp[g.idx()] == usize::MAX {
+                    comp[g.idx()] = c;
+                    rel[g.idx()] = want;
+                    members.push(g);
+                } else if rel[g.idx()] != want {
+                    conflict = true;
+                }
+            }
+        }
+        if conflict {
+            conflicted.push(start);
+        }
+        let (mut turned, mut all) = (0.0, 0.0);
+        for &f in &members {
+            let w = weight(f);
+            all += w;
+            if rel[f.idx()] {
+                turned += w;
+            }
+        }
+        if 2.0 * turned > all {
+            for f in &members {
+                rel[f.idx()] = !rel[f.idx()];
+            }
+        }
+        comps.push(members);
+    }
+    Components {
+        comp,
+        rel,
+        comps,
+        conflicted,
+    }
+}
+
+/// Turns parts of a component (`members`, faces joined by manifold edges)
+/// until no edge between two parts is inconsistent: a part is a set of
+/// faces joined by edges they walk consistently (with the turns in `turn`),
+/// so every edge between two parts is inconsistent, and turning a part
+/// makes all of its edges to other parts consistent and breaks none. The
+/// part of the least area with such an edge turns first (ties: the first
+/// face); each turn makes at least one edge consistent, so this ends, with
+/// the inconsistent edges that no turn of a part can mend inside parts.
+fn turn_parts(mesh: &Mesh, members: &[FaceId], area: &[f64], turn: &mut [bool]) {
+    let index: rustc_hash::FxHashMap<FaceId, usize> =
+        members.iter().enumerate().map(|(k, &f)| (f, k)).collect();
+    // The manifold edges between two members, as pairs of member indices
+    // with whether the two walk the edge the same way (as given).
+    let mut links: Vec<(usize, usize, bool)> = Vec::new();
+    for &f in members {
+        for e in mesh.face_edges(f) {
+            let u = &mesh.edge(e).uses;
+            if u.len() != 2 || u[0].face == u[1].face || u[0].face != f {
+                continue;
+            }
+            if let (Some(&a), Some(&b)) = (index.get(&u[0].face), index.get(&u[1].face)) {
+                links.push((a, b, u[0].forward == u[1].forward));
+            }
+        }
+    }
+    let n = members.len();
+    loop {
+        let flipped = |k: usize| turn[members[k].idx()];
+        let consistent = |&(a, b, same): &(usize, usize, bool)| same == (flipped(a) != flipped(b));
+        let mut parent: Vec<usize> = (0..n).collect();
+        for l in links.iter().filter(|l| consistent(l)) {
+            crate::join(&mut parent, l.0, l.1);
+        }
+        let part: Vec<usize> = (0..n).map(|k| crate::root(&mut parent, k)).collect();
+        let mut part_area = vec![0.0; n];
+        for k in 0..n {
+            part_area[part[k]] += area[members[k].idx()];
+        }
+        let mut open = vec![false; n];
+        for l in links.iter().filter(|l| !consistent(l)) {
+            if part[l.0] != part[l.1] {
+                open[part[l.0]] = true;
+                open[part[l.1]] = true;
+            }
+        }
+        // Roots are each part's least member index: ties go to the first.
+        let Some(p) = (0..n)
+            .filter(|&r| open[r])
+            .min_by(|&a, &b| part_area[a].total_cmp(&part_area[b]).then(a.cmp(&b)))
+        else {
+            return;
+        };
+        for k in 0..n {
+            if part[k] == p {
+                let f = members[k].idx();
+                turn[f] = !turn[f];
+            }
+        }
+    }
+}
+
+/// Makes orientation consistent again across the edges that cutting and
+/// cleaning joined, keeping every decision that does not conflict: faces
+/// joined by manifold edges form components as in [`orient`]'s first step,
+/// and in each the faces of the lesser area turn to agree with the rest
+/// (so a component that is consistent already keeps its orientation, and a
+/// model without an inconsistently oriented edge is returned unchanged).
+/// ugflip oriented the faces before ugisect cut them; a slab's side whose
+/// corners an export rounded a centimetre apart from the floor's is a part
+/// of its own there, and only after the cuts does it share an edge with the
+/// floor. Returns the faces turned, in face order (the model's faces keep
+/// their ids).
+pub fn agree(mut model: Model) -> (Model, Vec<FaceId>) {
+    if !model.is_flat() {
+        return (model, Vec::new());
+    }
+    // The topology of a copy: a flat model's faces keep their ids in it.
+    let mesh = Mesh::from_model(model.clone());
+    if mesh.edges().all(|e| {
+        let u = &mesh.edge(e).uses;
+        u.len() != 2 || u[0].face == u[1].face || u[0].forward != u[1].forward
+    }) {
+        return (model, Vec::new());
+    }
+    let faces: Vec<FaceId> = mesh.faces().collect();
+    let area: Vec<f64> = (0..mesh.model().faces.len())
+        .map(|i| mesh.face_area(FaceId(i as u32)).abs())
+        .collect();
+    let Components {
+        comp,
+        mut rel,
+        comps,
+        conflicted,
+    } = components(&mesh, &faces, |f| area[f.idx()]);
+    // A component no orientation makes consistent (cuts joined the inside
+    // of a solid to its outside): the walk's flips depend on its order, so
+    // such a component starts from the faces as they are, and its parts
+    // turn one at a time, each only where that makes edges consistent.
+    for start in conflicted {
+        let members = &comps[comp[start.idx()]];
+        for f in members {
+            rel[f.idx()] = false;
+        }
+        turn_parts(&mesh, members, &area, &mut rel);
+    }
+    let turned: Vec<FaceId> = faces.into_iter().filter(|f| rel[f.idx()]).collect();
+    for f in &turned {
+        for c in &mut model.faces[f.idx()].contours {
+            c[1..].reverse();
+        }
+    }
+    (model, turned)
+}
+
 /// Orients the faces of a flat model.
 ///
 /// Adjacency is decided on a welded copy (vertices within `eps` merged,
@@ -435,56 +633,16 @@ fn automatic(
             .map(|(_, l)| l.clone())
             .unwrap_or_default()
     };
-    // 1. Components over manifold edges, with relative flips.
-    let mut comp = vec![usize::MAX; nf];
-    let mut rel = vec![false; nf];
-    let mut comps: Vec<Vec<FaceId>> = Vec::new();
-    for &start in &faces {
-        if comp[start.idx()] != usize::MAX {
-            continue;
-        }
-        let c = comps.len();
-        let mut members = vec![start];
-        comp[start.idx()] = c;
-        let mut conflict = false;
-        let mut k = 0;
-        while k < members.len() {
-            let f = members[k];
-            k += 1;
-            for e in mesh.face_edges(f) {
-                let ed = mesh.edge(e);
-                if ed.uses.len() != 2 || ed.uses[0].face == ed.uses[1].face {
-                    continue;
-                }
-                let (mine, other) = if ed.uses[0].face == f {
-                    (ed.uses[0], ed.uses[1])
-                } else {
-                    (ed.uses[1], ed.uses[0])
-                };
-                let g = other.face;
-                // Consistent neighbours walk the shared edge in opposite directions.
-                let want = rel[f.idx()] ^ (mine.forward == other.forward);
-                if comp[g.idx()] == usize::MAX {
-                    comp[g.idx()] = c;
-                    rel[g.idx()] = want;
-                    members.push(g);
-                } else if rel[g.idx()] != want {
-                    conflict = true;
-                }
-            }
-        }
-        if conflict {
-            rep.nonorientable.push(label(start));
-        }
-        // Majority reference: flip the fewest.
-        let nflip = members.iter().filter(|f| rel[f.idx()]).count();
-        if 2 * nflip > members.len() {
-            for f in &members {
-                rel[f.idx()] = !rel[f.idx()];
-            }
-        }
-        comps.push(members);
-    }
+    // 1. Components over manifold edges, with relative flips (the
+    // majority of faces keeps its orientation).
+    let Components {
+        mut comp,
+        mut rel,
+        mut comps,
+        conflicted,
+    } = components(mesh, &faces, |_| 1.0);
+    rep.nonorientable
+        .extend(conflicted.into_iter().map(|f| label(f)));
     let closed_union = close_pairs(mesh, &mut comps, &mut comp, &mut rel);
     rep.components = comps.iter().filter(|m| !m.is_empty()).count();
     // Objects: components that share any edge (a wall whose foot face is
@@ -1115,4 +1273,126 @@ pub fn camera_eyes(m: &Model) -> Vec<DVec3> {
             _ => None,
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Model {
+        ug::parse(text.as_bytes(), "t").unwrap().model
+    }
+
+    /// Edges walked the same way by their two faces.
+    fn inconsistent(m: &Model) -> usize {
+        let mesh = Mesh::from_model(m.clone());
+        mesh.edges()
+            .filter(|&e| mesh.edge(e).uses.len() == 2 && !mesh.consistently_oriented(e))
+            .count()
+    }
+
+    /// A unit cube's six faces, each reversed where `reversed` says.
+    fn cube(reversed: [bool; 6]) -> Model {
+        let mut t = String::new();
+        for (k, p) in [
+            [0, 0, 0],
+            [1, 0, 0],
+            [1, 1, 0],
+            [0, 1, 0],
+            [0, 0, 1],
+            [1, 0, 1],
+            [1, 1, 1],
+            [0, 1, 1],
+        ]
+        .iter()
+        .enumerate()
+        {
+            t += &format!("v v{k} {} {} {};\n", p[0], p[1], p[2]);
+        }
+        // Outward, counter-clockwise seen from outside.
+        let faces = [
+            [0, 3, 2, 1],
+            [4, 5, 6, 7],
+            [0, 1, 5, 4],
+            [1, 2, 6, 5],
+            [2, 3, 7, 6],
+            [3, 0, 4, 7],
+        ];
+        for (k, f) in faces.iter().enumerate() {
+            let mut f = f.to_vec();
+            if reversed[k] {
+                f[1..].reverse();
+            }
+            let names: Vec<String> = f.iter().map(|v| format!("v{v}")).collect();
+            t += &format!("f s{k} ({});\n", names.join(" "));
+        }
+        parse(&t)
+    }
+
+    #[test]
+    fn a_consistent_model_comes_back_as_it_went_in() {
+        let m = cube([false; 6]);
+        let (out, turned) = agree(m.clone());
+        assert!(turned.is_empty());
+        assert_eq!(ug::write_string(&out), ug::write_string(&m));
+    }
+
+    #[test]
+    fn the_faces_of_the_lesser_area_turn() {
+        // Two sides reversed: they turn back, not the other four.
+        let (out, turned) = agree(cube([false, true, false, false, true, false]));
+        assert_eq!(turned, [FaceId(1), FaceId(4)]);
+        assert_eq!(inconsistent(&out), 0);
+        assert_eq!(ug::write_string(&out), ug::write_string(&cube([false; 6])));
+        // Four reversed: the two others turn.
+        let (out, turned) = agree(cube([true, true, false, true, true, true]));
+        assert_eq!(turned, [FaceId(2)]);
+        assert_eq!(inconsistent(&out), 0);
+    }
+
+    /// A Möbius band of `n` quads, quad `k` reversed where `flips` has bit
+    /// `k`: no orientation makes it consistent, and the best leaves one
+    /// edge walked the same way.
+    fn moebius(n: usize, flips: u32) -> Model {
+        let mut t = String::new();
+        for k in 0..n {
+            let a = std::f64::consts::TAU * k as f64 / n as f64;
+            // The cross-section turns by half a turn around the loop.
+            let (s, c) = (a / 2.0).sin_cos();
+            for (side, r) in [("a", -0.3), ("b", 0.3)] {
+                let (rr, z) = (2.0 + r * c, r * s);
+                t += &format!("v {side}{k} {} {} {z};\n", rr * a.cos(), rr * a.sin());
+            }
+        }
+        for k in 0..n {
+            let j = (k + 1) % n;
+            // The last quad closes the band across the twist.
+            let (aj, bj) = if j == 0 {
+                ("b0".to_string(), "a0".to_string())
+            } else {
+                (format!("a{j}"), format!("b{j}"))
+            };
+            let mut f = vec![format!("a{k}"), format!("b{k}"), bj, aj];
+            if flips >> k & 1 == 1 {
+                f[1..].reverse();
+            }
+            t += &format!("f q{k} ({});\n", f.join(" "));
+        }
+        parse(&t)
+    }
+
+    #[test]
+    fn a_band_no_orientation_mends_keeps_one_inconsistent_edge() {
+        for flips in [0, 0b1, 0b1010_0110, 0b0101_0101, 0b1111_0000, 0b1_1011] {
+            let m = moebius(9, flips);
+            let before = inconsistent(&m);
+            assert!(before >= 1);
+            let (out, turned) = agree(m);
+            assert_eq!(inconsistent(&out), 1, "flips {flips:b}");
+            // Nothing turns where the faces as given leave one edge only.
+            if before == 1 {
+                assert!(turned.is_empty(), "flips {flips:b}");
+            }
+        }
+    }
 }
