@@ -409,7 +409,7 @@ pub fn agree(mut model: Model) -> (Model, Vec<FaceId>) {
     let mesh = Mesh::from_model(model.clone());
     if mesh.edges().all(|e| {
         let u = &mesh.edge(e).uses;
-        u.len() != 2 || u[0].face == u[1].face || u[0].forward != u[1].forward
+        u.len() != 2 || u[0].face == u[1].face || mesh.consistently_oriented(e)
     }) {
         return (model, Vec::new());
     }
@@ -641,8 +641,7 @@ fn automatic(
         mut comps,
         conflicted,
     } = components(mesh, &faces, |_| 1.0);
-    rep.nonorientable
-        .extend(conflicted.into_iter().map(|f| label(f)));
+    rep.nonorientable.extend(conflicted.into_iter().map(label));
     let closed_union = close_pairs(mesh, &mut comps, &mut comp, &mut rel);
     rep.components = comps.iter().filter(|m| !m.is_empty()).count();
     // Objects: components that share any edge (a wall whose foot face is
@@ -1372,7 +1371,7 @@ mod tests {
             } else {
                 (format!("a{j}"), format!("b{j}"))
             };
-            let mut f = vec![format!("a{k}"), format!("b{k}"), bj, aj];
+            let mut f = [format!("a{k}"), format!("b{k}"), bj, aj];
             if flips >> k & 1 == 1 {
                 f[1..].reverse();
             }
